@@ -1,0 +1,59 @@
+#pragma once
+
+#include <range_nlm/impl/nonlocal_means_filter.hpp>
+#include <range_nlm/temporal_nonlocal_means_filter.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace range_nlm
+{
+
+template <typename PointT>
+void
+TemporalNonLocalMeansFilter<PointT>::setFrames(const std::deque<PointCloudConstPtr>& frames,
+                                               std::size_t current)
+{
+  if (current >= frames.size())
+    throw std::invalid_argument("range_nlm: current frame index " + std::to_string(current) +
+                                " is outside the " + std::to_string(frames.size()) + " frames given");
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    if (!frames[k])
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null");
+  frames_ = frames;
+  current_ = current;
+  this->setInputCloud(frames[current]);
+}
+
+template <typename PointT>
+void
+TemporalNonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
+{
+  const PointCloud& input = *this->input_;
+  // Without setFrames (or after setInputCloud with another cloud) the window is the input alone.
+  const bool own_window = !frames_.empty() && frames_[current_].get() == &input;
+  std::vector<Grid> grids;
+  std::vector<const Grid*> pointers;
+  int center = 0;
+  if (own_window) {
+    grids.reserve(frames_.size());
+    for (std::size_t k = 0; k < frames_.size(); ++k) {
+      const std::string what = "frame " + std::to_string(k) + " of the temporal window";
+      grids.push_back(detail::toGrid(*frames_[k], what.c_str()));
+    }
+    center = static_cast<int>(current_);
+  } else {
+    grids.push_back(detail::toGrid(input));
+  }
+  for (const Grid& g : grids)
+    pointers.push_back(&g);
+  const std::vector<unsigned char> active =
+      detail::activeMask(this->indices_.get(), input.size(), this->use_indices_ && !this->fake_indices_);
+  const Viewpoint viewpoint{input.sensor_origin_[0], input.sensor_origin_[1], input.sensor_origin_[2]};
+  const FilterRun run = runFilter(pointers, center, parameters_, viewpoint, active);
+  frame_weights_ = run.frame_weights;
+  frame_bandwidths_ = run.bandwidths;
+  detail::fromGrid(input, run.output, output);
+}
+
+} // namespace range_nlm

@@ -1,0 +1,107 @@
+#pragma once
+
+#include <range_nlm/impl/temporal_nonlocal_means_filter.hpp>
+#include <range_nlm/temporal_stream.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace range_nlm
+{
+
+template <typename PointT>
+TemporalStream<PointT>::TemporalStream(int radius, bool causal, const FilterParameters& parameters)
+    : radius_(radius), causal_(causal), parameters_(parameters)
+{
+  if (radius < 0)
+    throw std::invalid_argument("range_nlm: temporal radius " + std::to_string(radius) +
+                                " is invalid: must be >= 0");
+  parameters_.validate();
+}
+
+template <typename PointT>
+typename TemporalStream<PointT>::CloudPtr
+TemporalStream<PointT>::filterAt(std::size_t t)
+{
+  const std::size_t lo = t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0;
+  const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
+  std::deque<CloudConstPtr> frames;
+  for (std::size_t k = std::max(lo, first_); k <= hi; ++k)
+    frames.push_back(window_[k - first_]);
+  TemporalNonLocalMeansFilter<PointT> filter;
+  filter.setParameters(parameters_);
+  filter.setFrames(frames, t - std::max(lo, first_));
+  CloudPtr out(new PointCloud);
+  filter.filter(*out);
+  last_weights_ = filter.getFrameWeights();
+  return out;
+}
+
+template <typename PointT>
+void
+TemporalStream<PointT>::dropBefore(std::size_t t)
+{
+  while (!window_.empty() && first_ < t) {
+    window_.pop_front();
+    ++first_;
+  }
+}
+
+template <typename PointT>
+std::vector<typename TemporalStream<PointT>::CloudPtr>
+TemporalStream<PointT>::push(const CloudConstPtr& frame)
+{
+  if (!frame)
+    throw std::invalid_argument("range_nlm: pushed frame is null");
+  if (!window_.empty() && (frame->width != window_.front()->width || frame->height != window_.front()->height))
+    throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) + " is " +
+                                std::to_string(frame->width) + " x " + std::to_string(frame->height) +
+                                " but the sequence is " + std::to_string(window_.front()->width) + " x " +
+                                std::to_string(window_.front()->height));
+  window_.push_back(frame);
+  ++pushed_;
+  std::vector<CloudPtr> ready;
+  // Frame t is ready once t + r (causal: t) has been pushed.
+  const std::size_t lag = causal_ ? 0 : static_cast<std::size_t>(radius_);
+  while (emitted_ + lag < pushed_) {
+    ready.push_back(filterAt(emitted_));
+    ++emitted_;
+    const std::size_t keep_from = emitted_ >= static_cast<std::size_t>(radius_) ? emitted_ - radius_ : 0;
+    dropBefore(keep_from);
+  }
+  return ready;
+}
+
+template <typename PointT>
+std::vector<typename TemporalStream<PointT>::CloudPtr>
+TemporalStream<PointT>::flush()
+{
+  std::vector<CloudPtr> ready;
+  while (emitted_ < pushed_) {
+    ready.push_back(filterAt(emitted_));
+    ++emitted_;
+    const std::size_t keep_from = emitted_ >= static_cast<std::size_t>(radius_) ? emitted_ - radius_ : 0;
+    dropBefore(keep_from);
+  }
+  window_.clear();
+  first_ = pushed_;
+  return ready;
+}
+
+template <typename PointT>
+std::vector<typename pcl::PointCloud<PointT>::Ptr>
+filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& frames, int radius,
+               bool causal, const FilterParameters& parameters)
+{
+  TemporalStream<PointT> stream(radius, causal, parameters);
+  std::vector<typename pcl::PointCloud<PointT>::Ptr> out;
+  for (const auto& frame : frames)
+    for (auto& f : stream.push(frame))
+      out.push_back(f);
+  for (auto& f : stream.flush())
+    out.push_back(f);
+  return out;
+}
+
+} // namespace range_nlm

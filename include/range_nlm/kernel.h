@@ -1,0 +1,108 @@
+/// \file kernel.h
+/// \brief The PCL-free numeric kernel of the non-local range filter (METHOD.md, static and
+/// temporal). The pcl::Filter classes only adapt clouds to these functions.
+#pragma once
+
+#include <range_nlm/grid.h>
+#include <range_nlm/parameters.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace range_nlm
+{
+
+/// Sensor position the normals are oriented toward, in cloud coordinates.
+using Viewpoint = std::array<float, 3>;
+
+/// Least-squares plane normals over a `window` x `window` grid neighbourhood (PCL's
+/// solvePlaneParameters on the neighbourhood covariance), oriented toward `viewpoint`.
+/// Needs at least 3 valid neighbours; otherwise the normal is NaN.
+NormalField
+estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads);
+
+/// Edge-preserving smoothing of the range along each camera ray, used only to estimate normals:
+/// rho'_i = sum_j w_ij rho_j / sum_j w_ij over a `window` x `window` neighbourhood with
+/// w_ij = exp(-(rho_j - rho_i)^2 / (2 sigma^2)), rho = distance from the viewpoint.
+Grid
+presmoothAlongRays(const Grid& grid, int window, float sigma, const Viewpoint& viewpoint, int threads);
+
+/// Automatic bandwidths (METHOD.md step 4), from random valid sample points p_k:
+/// mu_d = mean of the largest distance from p_k to the points of its search window,
+/// sigma_s = mean of the standard deviation of the offsets of that window to the tangent plane.
+struct Bandwidths
+{
+  float mu_d = 0.0f;
+  float sigma_s = 0.0f;
+  /// d and s actually used (estimates scaled, or user-given values).
+  float distance = 0.0f;
+  float similarity = 0.0f;
+};
+
+/// Estimates mu_d and sigma_s; deterministic for a given seed. Throws std::invalid_argument if
+/// the grid has no valid point.
+Bandwidths
+estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
+                   std::uint64_t seed);
+
+/// One frame of the (temporal) neighbourhood: its points, bandwidths and frame weight
+/// Psi_k = Psi_dk * Psi_sk. The static filter is the case of one frame with weight 1.
+struct FrameTerm
+{
+  const Grid* grid = nullptr;
+  float distance_bandwidth = 0.0f;
+  float similarity_bandwidth = 0.0f;
+  float weight = 1.0f;
+};
+
+/// Computes for every point i of `center` the filtered normal offset
+///   h_i = sum_k Psi_k sum_{j in N_k(i)} Phi_dk Phi_sk ((p_i - p_j) . n_i)
+///       / sum_k Psi_k sum_{j in N_k(i)} Phi_dk Phi_sk
+/// with Sim(i, j) the mean of |(p_{i+o} - p_{j+o}) . n_i|^2 over the valid patch pairs.
+/// `active` (size of the grid, may be empty = all) selects the points to compute; h is 0 for
+/// other, invalid or normal-less points. All frames must have the size of `center`.
+void
+computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+               int search_window, int patch_size, Evaluation evaluation, int threads,
+               const std::vector<unsigned char>& active, std::vector<float>& offsets);
+
+/// Moves the active points by their offsets: p' = p - h n, or along the line of sight.
+void
+applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
+             Displacement displacement, const Viewpoint& viewpoint);
+
+/// Frame weights of the temporal filter: Psi_dk = (1/2)^|k - c|, Psi_sk = exp(-s_k^2 / max s^2).
+float
+temporalDistanceWeight(int k, int center);
+float
+temporalNoiseWeight(float s_k, float s_max);
+
+/// Result of a whole filter run on the kernel level.
+struct FilterRun
+{
+  Grid output;
+  /// Bandwidths per frame of the first iteration (frame order as given).
+  std::vector<Bandwidths> bandwidths;
+  /// Psi_k = Psi_dk * Psi_sk per frame of the first iteration.
+  std::vector<float> frame_weights;
+};
+
+/// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.
+/// `frames[center]` is filtered; the others are its temporal neighbours (left unchanged).
+/// `active` as in computeOffsets. Throws std::invalid_argument on invalid parameters or data.
+FilterRun
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active);
+
+namespace detail
+{
+/// exp(x) for x <= 0, accurate to a few ulp, vectorizable; exp(x) = 0 below -87.
+float
+expNonPositive(float x);
+/// 1 / b^2 with b = 0 mapped to a huge finite value (only exact matches keep weight).
+float
+inverseSquare(float bandwidth);
+} // namespace detail
+
+} // namespace range_nlm

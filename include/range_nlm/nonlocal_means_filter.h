@@ -1,0 +1,67 @@
+/// \file nonlocal_means_filter.h
+/// \brief Feature-preserving non-local denoising of one organized range frame (Schall, Belyaev,
+/// Seidel 2006, Sec. 3.2; decisions in the README) as a pcl::Filter.
+#pragma once
+
+#include <range_nlm/kernel.h>
+#include <range_nlm/parameter_setters.h>
+
+#include <pcl/filters/filter.h>
+
+namespace range_nlm
+{
+
+/// Moves every valid point of an organized cloud along its normal n_i by
+///   h_i = sum_j Phi_d Phi_s ((p_i - p_j) . n_i) / sum_j Phi_d Phi_s,  j in the S x S window,
+/// Phi_d = exp(-|p_i - p_j|^2 / d^2), Phi_s = exp(-Sim(i, j) / s^2), Sim the mean squared height
+/// difference of the P x P patches of i and j along n_i.
+///
+/// The pcl::Filter contract: output has the input's width, height, header, sensor pose and every
+/// non-xyz field; only x, y, z move. NaN points stay NaN and never contribute. With setIndices
+/// only the indexed points move. Filtering in place works. Bad input throws std::invalid_argument
+/// with a message that names the problem.
+template <typename PointT>
+class NonLocalMeansFilter : public pcl::Filter<PointT>, public ParameterSetters
+{
+public:
+  using PointCloud = typename pcl::Filter<PointT>::PointCloud;
+  using Ptr = pcl::shared_ptr<NonLocalMeansFilter<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const NonLocalMeansFilter<PointT>>;
+
+  NonLocalMeansFilter() { this->filter_name_ = "NonLocalMeansFilter"; }
+
+  /// d used by the last filter() call (first iteration), cloud units.
+  float getEstimatedDistanceBandwidth() const { return bandwidths_.distance; }
+  /// s used by the last filter() call (first iteration), cloud units.
+  float getEstimatedSimilarityBandwidth() const { return bandwidths_.similarity; }
+  /// mu_d and sigma_s as estimated by the last filter() call.
+  const Bandwidths& getBandwidths() const { return bandwidths_; }
+
+protected:
+  void applyFilter(PointCloud& output) override;
+
+  Bandwidths bandwidths_;
+};
+
+/// Adapter helpers shared by the filters (PCL cloud <-> kernel grid).
+namespace detail
+{
+/// Copies x, y, z of an organized cloud into a Grid; throws std::invalid_argument naming the
+/// problem if the cloud is not organized or holds an infinite coordinate.
+template <typename PointT>
+Grid
+toGrid(const pcl::PointCloud<PointT>& cloud, const char* what = "input cloud");
+/// Active mask from PCL indices (empty = all points); throws on an out-of-range index.
+std::vector<unsigned char>
+activeMask(const pcl::Indices* indices, std::size_t size, bool use_indices);
+/// Copies the input to output and writes the grid's x, y, z; recomputes is_dense.
+template <typename PointT>
+void
+fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud<PointT>& output);
+} // namespace detail
+
+} // namespace range_nlm
+
+#ifdef RANGE_NLM_HEADER_ONLY
+#include <range_nlm/impl/nonlocal_means_filter.hpp>
+#endif

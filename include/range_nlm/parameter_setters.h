@@ -1,0 +1,54 @@
+/// \file parameter_setters.h
+/// \brief Setters and getters shared by the static and the temporal filter; they write into one
+/// FilterParameters, validated when filtering.
+#pragma once
+
+#include <range_nlm/parameters.h>
+
+namespace range_nlm
+{
+
+class ParameterSetters
+{
+public:
+  /// All parameters at once (validated when filtering).
+  void setParameters(const FilterParameters& p) { parameters_ = p; }
+  const FilterParameters& getParameters() const { return parameters_; }
+
+  /// S, odd, pixels (default 7).
+  void setSearchWindowSize(int s) { parameters_.search_window = s; }
+  int getSearchWindowSize() const { return parameters_.search_window; }
+  /// P, odd, pixels (default 5).
+  void setPatchSize(int p) { parameters_.patch_size = p; }
+  int getPatchSize() const { return parameters_.patch_size; }
+  /// Filter passes (default 1).
+  void setIterations(int n) { parameters_.iterations = n; }
+  int getIterations() const { return parameters_.iterations; }
+  /// OpenMP threads, 0 = all (default). Output is independent of it.
+  void setNumberOfThreads(int n) { parameters_.threads = n; }
+  int getNumberOfThreads() const { return parameters_.threads; }
+  /// d in cloud units; 0 = automatic (default).
+  void setDistanceBandwidth(float d) { parameters_.distance_bandwidth = d; }
+  float getDistanceBandwidth() const { return parameters_.distance_bandwidth; }
+  /// s in cloud units; 0 = automatic (default).
+  void setSimilarityBandwidth(float s) { parameters_.similarity_bandwidth = s; }
+  float getSimilarityBandwidth() const { return parameters_.similarity_bandwidth; }
+  /// Seed of the bandwidth sample (default 42).
+  void setSeed(std::uint64_t seed) { parameters_.seed = seed; }
+  std::uint64_t getSeed() const { return parameters_.seed; }
+  /// Side of the normal-estimation neighbourhood, odd >= 3 (default 3, the one-ring).
+  void setNormalWindowSize(int n) { parameters_.normal_window = n; }
+  int getNormalWindowSize() const { return parameters_.normal_window; }
+  /// Fast (box-filtered, default) or direct (reference) evaluation.
+  void setEvaluation(Evaluation e) { parameters_.evaluation = e; }
+  Evaluation getEvaluation() const { return parameters_.evaluation; }
+  /// Displacement along the normal (default) or the line of sight.
+  void setDisplacement(Displacement d) { parameters_.displacement = d; }
+  Displacement getDisplacement() const { return parameters_.displacement; }
+
+
+protected:
+  FilterParameters parameters_ = FilterParameters::recommended();
+};
+
+} // namespace range_nlm

@@ -1,0 +1,58 @@
+/// \file temporal_nonlocal_means_filter.h
+/// \brief Non-local denoising of one frame of a range sequence using its neighbouring frames
+/// (Schall, Belyaev, Seidel 2006, Sec. 3.3) as a pcl::Filter.
+#pragma once
+
+#include <range_nlm/kernel.h>
+#include <range_nlm/parameter_setters.h>
+
+#include <pcl/filters/filter.h>
+
+#include <deque>
+
+namespace range_nlm
+{
+
+/// Filters the current frame c of a window of frames k = c - a .. c + b of one size:
+///   p'_i = p_i - n_i * sum_k Psi_k sum_{j in N_k} Phi_dk Phi_sk ((p_i - p_j) . n_i)
+///                    / sum_k Psi_k sum_{j in N_k} Phi_dk Phi_sk
+/// with Psi_k = Psi_dk Psi_sk, Psi_dk = (1/2)^|k - c|, Psi_sk = exp(-s_k^2 / max_k s_k^2), and the
+/// similarity of patches of frame k with the patch of p_i in frame c projected on n_i of frame c.
+/// Per-frame bandwidths d_k, s_k are estimated from each frame. A window of one frame gives the
+/// static NonLocalMeansFilter result. The input cloud is the current frame.
+template <typename PointT>
+class TemporalNonLocalMeansFilter : public pcl::Filter<PointT>, public ParameterSetters
+{
+public:
+  using PointCloud = typename pcl::Filter<PointT>::PointCloud;
+  using PointCloudConstPtr = typename PointCloud::ConstPtr;
+  using Ptr = pcl::shared_ptr<TemporalNonLocalMeansFilter<PointT>>;
+
+  TemporalNonLocalMeansFilter() { this->filter_name_ = "TemporalNonLocalMeansFilter"; }
+
+  /// The frames in time order and the index of the current one, which also becomes the input
+  /// cloud. Throws std::invalid_argument if `current` is not an index of `frames` or a frame is
+  /// null.
+  void setFrames(const std::deque<PointCloudConstPtr>& frames, std::size_t current);
+  const std::deque<PointCloudConstPtr>& getFrames() const { return frames_; }
+  std::size_t getCurrentFrameIndex() const { return current_; }
+
+  /// Psi_k = Psi_dk * Psi_sk per frame of the last filter() call (0 for an all-NaN neighbour).
+  const std::vector<float>& getFrameWeights() const { return frame_weights_; }
+  /// Bandwidths per frame of the last filter() call.
+  const std::vector<Bandwidths>& getFrameBandwidths() const { return frame_bandwidths_; }
+
+protected:
+  void applyFilter(PointCloud& output) override;
+
+  std::deque<PointCloudConstPtr> frames_;
+  std::size_t current_ = 0;
+  std::vector<float> frame_weights_;
+  std::vector<Bandwidths> frame_bandwidths_;
+};
+
+} // namespace range_nlm
+
+#ifdef RANGE_NLM_HEADER_ONLY
+#include <range_nlm/impl/temporal_nonlocal_means_filter.hpp>
+#endif

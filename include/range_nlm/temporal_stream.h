@@ -1,0 +1,66 @@
+/// \file temporal_stream.h
+/// \brief Frame-by-frame temporal filtering for live sensors and long recordings.
+#pragma once
+
+#include <range_nlm/parameters.h>
+
+#include <pcl/point_cloud.h>
+
+#include <deque>
+#include <vector>
+
+namespace range_nlm
+{
+
+/// Push frames one by one; each filtered frame comes out once its window is complete.
+/// Centred mode (default): the window of frame t is t - r .. t + r (clipped at the sequence
+/// start and end), so output lags input by r frames. Causal mode: the window is t - r .. t and
+/// every frame comes out as soon as it is pushed. flush() ends the sequence; every pushed frame
+/// yields exactly one output frame, in order. At most 2r + 1 (causal: r + 1) frames are held.
+template <typename PointT>
+class TemporalStream
+{
+public:
+  using PointCloud = pcl::PointCloud<PointT>;
+  using CloudConstPtr = typename PointCloud::ConstPtr;
+  using CloudPtr = typename PointCloud::Ptr;
+
+  /// Throws std::invalid_argument for a negative radius or invalid parameters.
+  TemporalStream(int radius, bool causal, const FilterParameters& parameters);
+
+  /// Adds the next frame; returns the frames that became ready (zero or one). Throws
+  /// std::invalid_argument if the frame's size differs from the first frame's.
+  std::vector<CloudPtr> push(const CloudConstPtr& frame);
+  /// Filters the frames still waiting for future neighbours, with the windows clipped at the end.
+  std::vector<CloudPtr> flush();
+
+  /// Frames currently held in memory.
+  std::size_t heldFrames() const { return window_.size(); }
+  /// Psi_k of the last frame produced.
+  const std::vector<float>& lastFrameWeights() const { return last_weights_; }
+
+private:
+  CloudPtr filterAt(std::size_t t);
+  void dropBefore(std::size_t t);
+
+  int radius_;
+  bool causal_;
+  FilterParameters parameters_;
+  std::deque<CloudConstPtr> window_; // frames first_ .. first_ + size - 1
+  std::size_t first_ = 0;            // sequence index of window_.front()
+  std::size_t pushed_ = 0;
+  std::size_t emitted_ = 0;
+  std::vector<float> last_weights_;
+};
+
+/// Batch form: filters a whole sequence with the same windows as TemporalStream.
+template <typename PointT>
+std::vector<typename pcl::PointCloud<PointT>::Ptr>
+filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& frames, int radius,
+               bool causal, const FilterParameters& parameters);
+
+} // namespace range_nlm
+
+#ifdef RANGE_NLM_HEADER_ONLY
+#include <range_nlm/impl/temporal_stream.hpp>
+#endif

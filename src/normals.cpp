@@ -1,0 +1,116 @@
+// Normal estimation over grid neighbourhoods and the edge-preserving pre-smoothing used for it.
+#include <range_nlm/kernel.h>
+
+#include <pcl/features/feature.h> // pcl::solvePlaneParameters
+
+#include <cmath>
+#include <limits>
+
+namespace range_nlm
+{
+
+NormalField
+estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads)
+{
+  const int width = grid.width, height = grid.height;
+  const int r = window / 2;
+  NormalField normals;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  normals.nx.assign(grid.size(), nan);
+  normals.ny.assign(grid.size(), nan);
+  normals.nz.assign(grid.size(), nan);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const int i = v * width + u;
+      if (!grid.valid[i])
+        continue;
+      // Moments relative to p_i (a local origin keeps the covariance well conditioned).
+      double s[3] = {0, 0, 0}, ss[6] = {0, 0, 0, 0, 0, 0};
+      int count = 0;
+      for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv)
+        for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
+          const int j = jv * width + ju;
+          if (!grid.valid[j])
+            continue;
+          const double qx = double(grid.x[j]) - grid.x[i];
+          const double qy = double(grid.y[j]) - grid.y[i];
+          const double qz = double(grid.z[j]) - grid.z[i];
+          s[0] += qx, s[1] += qy, s[2] += qz;
+          ss[0] += qx * qx, ss[1] += qx * qy, ss[2] += qx * qz;
+          ss[3] += qy * qy, ss[4] += qy * qz, ss[5] += qz * qz;
+          ++count;
+        }
+      if (count < 3)
+        continue;
+      const double inv = 1.0 / count;
+      const double mx = s[0] * inv, my = s[1] * inv, mz = s[2] * inv;
+      Eigen::Matrix3f cov;
+      cov(0, 0) = float(ss[0] * inv - mx * mx);
+      cov(0, 1) = cov(1, 0) = float(ss[1] * inv - mx * my);
+      cov(0, 2) = cov(2, 0) = float(ss[2] * inv - mx * mz);
+      cov(1, 1) = float(ss[3] * inv - my * my);
+      cov(1, 2) = cov(2, 1) = float(ss[4] * inv - my * mz);
+      cov(2, 2) = float(ss[5] * inv - mz * mz);
+      float nx, ny, nz, curvature;
+      pcl::solvePlaneParameters(cov, nx, ny, nz, curvature);
+      const float len = std::sqrt(nx * nx + ny * ny + nz * nz);
+      if (!std::isfinite(len) || len < 0.5f)
+        continue;
+      nx /= len, ny /= len, nz /= len;
+      const float vx = viewpoint[0] - grid.x[i], vy = viewpoint[1] - grid.y[i], vz = viewpoint[2] - grid.z[i];
+      if (nx * vx + ny * vy + nz * vz < 0.0f)
+        nx = -nx, ny = -ny, nz = -nz;
+      normals.nx[i] = nx;
+      normals.ny[i] = ny;
+      normals.nz[i] = nz;
+    }
+  }
+  return normals;
+}
+
+Grid
+presmoothAlongRays(const Grid& grid, int window, float sigma, const Viewpoint& viewpoint, int threads)
+{
+  const int width = grid.width, height = grid.height;
+  const int r = window / 2;
+  const std::size_t n = grid.size();
+  std::vector<float> rho(n, 0.0f);
+  for (std::size_t i = 0; i < n; ++i)
+    if (grid.valid[i]) {
+      const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
+      rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
+    }
+  Grid out = grid;
+  if (!(sigma > 0.0f))
+    return out;
+  const float inv = 1.0f / (2.0f * sigma * sigma);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const int i = v * width + u;
+      if (!grid.valid[i] || !(rho[i] > 0.0f))
+        continue;
+      double num = 0.0, den = 0.0;
+      for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv)
+        for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
+          const int j = jv * width + ju;
+          if (!grid.valid[j])
+            continue;
+          const float d = rho[j] - rho[i];
+          const double w = std::exp(-d * d * inv);
+          num += w * d;
+          den += w;
+        }
+      const float scale = float((rho[i] + num / den) / rho[i]);
+      out.x[i] = viewpoint[0] + (grid.x[i] - viewpoint[0]) * scale;
+      out.y[i] = viewpoint[1] + (grid.y[i] - viewpoint[1]) * scale;
+      out.z[i] = viewpoint[2] + (grid.z[i] - viewpoint[2]) * scale;
+    }
+  }
+  return out;
+}
+
+} // namespace range_nlm
