@@ -2,6 +2,7 @@
 /// \brief Frame-by-frame temporal filtering for live sensors and long recordings.
 #pragma once
 
+#include <range_nlm/kernel.h>
 #include <range_nlm/parameters.h>
 
 #include <pcl/point_cloud.h>
@@ -38,6 +39,8 @@ public:
   std::size_t heldFrames() const { return window_.size(); }
   /// Psi_k of the last frame produced.
   const std::vector<float>& lastFrameWeights() const { return last_weights_; }
+  /// Bandwidths of the current frame of the last frame produced.
+  const Bandwidths& lastBandwidths() const { return last_bandwidths_; }
 
 private:
   CloudPtr filterAt(std::size_t t);
@@ -51,6 +54,7 @@ private:
   std::size_t pushed_ = 0;
   std::size_t emitted_ = 0;
   std::vector<float> last_weights_;
+  Bandwidths last_bandwidths_;
 };
 
 /// Batch form: filters a whole sequence with the same windows as TemporalStream.

@@ -35,6 +35,7 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   CloudPtr out(new PointCloud);
   filter.filter(*out);
   last_weights_ = filter.getFrameWeights();
+  last_bandwidths_ = filter.getFrameBandwidths()[t - std::max(lo, first_)];
   return out;
 }
 
