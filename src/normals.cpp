@@ -1,7 +1,7 @@
 // Normal estimation over grid neighbourhoods and the edge-preserving pre-smoothing used for it.
 #include <range_nlm/kernel.h>
 
-#include <pcl/features/feature.h> // pcl::solvePlaneParameters
+#include <pcl/common/eigen.h> // pcl::eigen33
 
 #include <cmath>
 #include <limits>
@@ -46,19 +46,23 @@ estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int th
         continue;
       const double inv = 1.0 / count;
       const double mx = s[0] * inv, my = s[1] * inv, mz = s[2] * inv;
-      Eigen::Matrix3f cov;
-      cov(0, 0) = float(ss[0] * inv - mx * mx);
-      cov(0, 1) = cov(1, 0) = float(ss[1] * inv - mx * my);
-      cov(0, 2) = cov(2, 0) = float(ss[2] * inv - mx * mz);
-      cov(1, 1) = float(ss[3] * inv - my * my);
-      cov(1, 2) = cov(2, 1) = float(ss[4] * inv - my * mz);
-      cov(2, 2) = float(ss[5] * inv - mz * mz);
-      float nx, ny, nz, curvature;
-      pcl::solvePlaneParameters(cov, nx, ny, nz, curvature);
-      const float len = std::sqrt(nx * nx + ny * ny + nz * nz);
-      if (!std::isfinite(len) || len < 0.5f)
+      // The plane normal is the eigenvector of the smallest eigenvalue (PCL's eigen33, as in
+      // pcl::solvePlaneParameters, but in double: with noise close to the pixel spacing the 3x3
+      // covariance is nearly isotropic and float rounding would decide the normal).
+      Eigen::Matrix3d cov;
+      cov(0, 0) = ss[0] * inv - mx * mx;
+      cov(0, 1) = cov(1, 0) = ss[1] * inv - mx * my;
+      cov(0, 2) = cov(2, 0) = ss[2] * inv - mx * mz;
+      cov(1, 1) = ss[3] * inv - my * my;
+      cov(1, 2) = cov(2, 1) = ss[4] * inv - my * mz;
+      cov(2, 2) = ss[5] * inv - mz * mz;
+      double eigenvalue = 0.0;
+      Eigen::Vector3d normal;
+      pcl::eigen33(cov, eigenvalue, normal);
+      const double len = normal.norm();
+      if (!std::isfinite(len) || len < 0.5)
         continue;
-      nx /= len, ny /= len, nz /= len;
+      float nx = float(normal.x() / len), ny = float(normal.y() / len), nz = float(normal.z() / len);
       const float vx = viewpoint[0] - grid.x[i], vy = viewpoint[1] - grid.y[i], vz = viewpoint[2] - grid.z[i];
       if (nx * vx + ny * vy + nz * vz < 0.0f)
         nx = -nx, ny = -ny, nz = -nz;

@@ -1,0 +1,129 @@
+// The box-filtered kernel against the direct one, and the small math helpers.
+#include "test_support.h"
+
+#include <range_nlm/kernel.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace range_nlm;
+
+namespace
+{
+Grid
+randomSurface(int w, int h, double hole_probability, std::uint64_t seed)
+{
+  auto cloud = test::makeCloud(w, h, [](double a, double b, int u, int) { return 1.0 + 0.2 * a + (u > 10 ? 0.15 : 0.0) + 0.1 * b * b; },
+                               0.004, seed);
+  test::punchHoles(cloud, hole_probability, seed + 1);
+  return Grid::fromInterleaved(&cloud[0].x, w, h, sizeof(pcl::PointXYZ) / sizeof(float));
+}
+
+double
+maxDifference(const std::vector<float>& a, const std::vector<float>& b)
+{
+  double m = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    m = std::max(m, double(std::fabs(a[i] - b[i])));
+  return m;
+}
+} // namespace
+
+TEST(Kernel, ExpMatchesStdExp)
+{
+  for (float x = -90.0f; x <= 0.0f; x += 0.01f) {
+    const float expected = std::exp(x);
+    const float got = detail::expNonPositive(x);
+    if (x < -87.0f)
+      EXPECT_EQ(got, 0.0f);
+    else
+      EXPECT_NEAR(got, expected, 4e-7f * expected + 1e-38f) << x;
+  }
+  EXPECT_EQ(detail::expNonPositive(-std::numeric_limits<float>::infinity()), 0.0f);
+}
+
+TEST(Kernel, FastMatchesDirectOnHolesBordersAndWindowSizes)
+{
+  const Viewpoint origin{0, 0, 0};
+  for (int holes = 0; holes < 2; ++holes) {
+    const Grid grid = randomSurface(23, 17, holes ? 0.15 : 0.0, 7 + holes);
+    const NormalField normals = estimateNormals(grid, 3, origin, 1);
+    for (int search : {1, 3, 5, 7, 9})
+      for (int patch : {1, 3, 5, 7, 11}) {
+        const std::vector<FrameTerm> terms{{&grid, 0.02f, 0.004f, 1.0f}};
+        std::vector<float> fast, direct;
+        computeOffsets(grid, normals, terms, search, patch, Evaluation::fast, 2, {}, fast);
+        computeOffsets(grid, normals, terms, search, patch, Evaluation::direct, 2, {}, direct);
+        EXPECT_LT(maxDifference(fast, direct), 2e-6) << "search " << search << " patch " << patch;
+      }
+  }
+}
+
+TEST(Kernel, FastMatchesDirectWithSeveralFrames)
+{
+  const Viewpoint origin{0, 0, 0};
+  const Grid a = randomSurface(31, 19, 0.1, 1), b = randomSurface(31, 19, 0.1, 2), c = randomSurface(31, 19, 0.1, 3);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  const std::vector<FrameTerm> terms{{&a, 0.03f, 0.005f, 0.3f}, {&b, 0.02f, 0.004f, 1.0f}, {&c, 0.025f, 0.006f, 0.2f}};
+  std::vector<float> fast, direct;
+  computeOffsets(b, normals, terms, 7, 5, Evaluation::fast, 2, {}, fast);
+  computeOffsets(b, normals, terms, 7, 5, Evaluation::direct, 2, {}, direct);
+  EXPECT_LT(maxDifference(fast, direct), 2e-6);
+}
+
+TEST(Kernel, ActiveMaskLimitsComputation)
+{
+  const Viewpoint origin{0, 0, 0};
+  const Grid grid = randomSurface(20, 20, 0.0, 3);
+  const NormalField normals = estimateNormals(grid, 3, origin, 1);
+  std::vector<unsigned char> active(grid.size(), 0);
+  active[5 * 20 + 5] = 1;
+  std::vector<float> offsets;
+  computeOffsets(grid, normals, {{&grid, 0.02f, 0.004f, 1.0f}}, 5, 3, Evaluation::fast, 1, active, offsets);
+  for (std::size_t i = 0; i < offsets.size(); ++i)
+    if (i != 5 * 20 + 5)
+      EXPECT_EQ(offsets[i], 0.0f);
+  EXPECT_NE(offsets[5 * 20 + 5], 0.0f);
+}
+
+TEST(Kernel, NormalsFaceTheViewpointAndFitPlanes)
+{
+  const Eigen::Vector3d n(0.3, -0.2, 1.0);
+  auto cloud = test::makeCloud(15, 12, test::plane(n, 1.2), 0.0, 1);
+  const Grid grid = Grid::fromInterleaved(&cloud[0].x, 15, 12, 4);
+  const NormalField normals = estimateNormals(grid, 3, Viewpoint{0, 0, 0}, 1);
+  const Eigen::Vector3d unit = -n.normalized(); // toward the camera at the origin
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    EXPECT_NEAR(normals.nx[i], unit.x(), 1e-4);
+    EXPECT_NEAR(normals.ny[i], unit.y(), 1e-4);
+    EXPECT_NEAR(normals.nz[i], unit.z(), 1e-4);
+  }
+}
+
+TEST(Kernel, TemporalWeights)
+{
+  EXPECT_FLOAT_EQ(temporalDistanceWeight(3, 3), 1.0f);
+  EXPECT_FLOAT_EQ(temporalDistanceWeight(2, 3), 0.5f);
+  EXPECT_FLOAT_EQ(temporalDistanceWeight(5, 3), 0.25f);
+  EXPECT_FLOAT_EQ(temporalNoiseWeight(2.0f, 2.0f), std::exp(-1.0f));
+  EXPECT_FLOAT_EQ(temporalNoiseWeight(1.0f, 2.0f), std::exp(-0.25f));
+  EXPECT_FLOAT_EQ(temporalNoiseWeight(0.0f, 0.0f), std::exp(-1.0f));
+}
+
+TEST(Kernel, BandwidthsAreDeterministicPerSeed)
+{
+  const Grid grid = randomSurface(40, 30, 0.05, 9);
+  const NormalField normals = estimateNormals(grid, 3, Viewpoint{0, 0, 0}, 1);
+  const Bandwidths a = estimateBandwidths(grid, normals, 7, 200, 1);
+  const Bandwidths b = estimateBandwidths(grid, normals, 7, 200, 1);
+  const Bandwidths c = estimateBandwidths(grid, normals, 7, 200, 2);
+  EXPECT_EQ(a.mu_d, b.mu_d);
+  EXPECT_EQ(a.sigma_s, b.sigma_s);
+  EXPECT_NE(a.mu_d, c.mu_d);
+  // noise 4 mm along the ray: the tangent-plane offsets (to noisy one-ring planes) spread by
+  // about that much, inflated by the normal error
+  EXPECT_GT(a.sigma_s, 0.003f);
+  EXPECT_LT(a.sigma_s, 0.012f);
+}

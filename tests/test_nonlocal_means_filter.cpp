@@ -1,0 +1,421 @@
+#include "test_support.h"
+
+#include <range_nlm/nonlocal_means_filter.h>
+
+#include <pcl/common/transforms.h>
+#include <pcl/point_types.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace range_nlm;
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+namespace
+{
+Cloud
+filtered(const Cloud& in, const FilterParameters& p)
+{
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setParameters(p);
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud out;
+  f.filter(out);
+  return out;
+}
+
+double
+maxDistance(const Cloud& a, const Cloud& b)
+{
+  double m = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (std::isnan(a[i].z) != std::isnan(b[i].z))
+      return INFINITY;
+    if (std::isnan(a[i].z))
+      continue;
+    m = std::max(m, double((a[i].getVector3fMap() - b[i].getVector3fMap()).norm()));
+  }
+  return m;
+}
+
+const Eigen::Vector3d kPlaneNormal(0.2, -0.1, 1.0);
+constexpr double kPlaneOffset = 1.5;
+
+Cloud
+noisyPlane(double sigma, std::uint64_t seed = 1, int w = 48, int h = 40)
+{
+  return test::makeCloud(w, h, test::plane(kPlaneNormal, kPlaneOffset), sigma, seed);
+}
+
+std::string
+errorOf(const std::function<void()>& f)
+{
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+} // namespace
+
+TEST(NonLocalMeansFilter, MatchesNaiveReferenceOfTheFormula)
+{
+  Cloud in = test::makeCloud(21, 17, [](double a, double b, int u, int) { return 1.0 + 0.3 * a * a + (u > 12 ? 0.05 : 0.0) + 0.1 * b; },
+                             0.003, 4);
+  test::punchHoles(in, 0.08, 5);
+  const Cloud expected = test::referenceFilter(in, 5, 3, 0.02, 0.003);
+  for (Evaluation e : {Evaluation::direct, Evaluation::fast}) {
+    FilterParameters p = FilterParameters::paper();
+    p.search_window = 5;
+    p.patch_size = 3;
+    p.distance_bandwidth = 0.02f;
+    p.similarity_bandwidth = 0.003f;
+    p.evaluation = e;
+    const Cloud out = filtered(in, p);
+    EXPECT_LT(maxDistance(out, expected), 2e-5) << (e == Evaluation::fast ? "fast" : "direct");
+    EXPECT_GT(maxDistance(out, in), 1e-4); // it did move points
+  }
+}
+
+TEST(NonLocalMeansFilter, NoisyPlaneGetsMuchCloser)
+{
+  const Cloud in = noisyPlane(0.004);
+  const double before = test::planeRmse(in, kPlaneNormal, kPlaneOffset);
+  // 4 mm noise at 5 mm pixel spacing: depth-camera conditions.
+  const double paper = test::planeRmse(filtered(in, FilterParameters::paper()), kPlaneNormal, kPlaneOffset);
+  const double recommended = test::planeRmse(filtered(in, FilterParameters::recommended()), kPlaneNormal, kPlaneOffset);
+  EXPECT_LT(paper, 0.75 * before) << before << " -> " << paper;
+  EXPECT_LT(recommended, 0.5 * before) << before << " -> " << recommended;
+  // Laser-grade noise (a quarter): the literal method works well.
+  const Cloud fine = noisyPlane(0.001, 2);
+  const double fine_before = test::planeRmse(fine, kPlaneNormal, kPlaneOffset);
+  EXPECT_LT(test::planeRmse(filtered(fine, FilterParameters::paper()), kPlaneNormal, kPlaneOffset), 0.5 * fine_before);
+}
+
+TEST(NonLocalMeansFilter, ExactPlaneDoesNotMove)
+{
+  const Cloud in = noisyPlane(0.0);
+  for (const FilterParameters& p : {FilterParameters::paper(), FilterParameters::recommended()}) {
+    const Cloud out = filtered(in, p);
+    EXPECT_LT(maxDistance(out, in), 1e-6);
+    for (const auto& q : out)
+      EXPECT_TRUE(std::isfinite(q.z));
+  }
+}
+
+TEST(NonLocalMeansFilter, ZeroBandwidthsDoNotDivideByZero)
+{
+  const Cloud in = noisyPlane(0.0);
+  FilterParameters p = FilterParameters::paper();
+  p.similarity_bandwidth = 0.0f; // automatic: estimates ~0 on an exact plane
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setParameters(p);
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud out;
+  f.filter(out);
+  EXPECT_LT(f.getEstimatedSimilarityBandwidth(), 1e-6f);
+  EXPECT_LT(maxDistance(out, in), 1e-6);
+}
+
+namespace
+{
+/// Mean displacement of the points within two columns of `edge_u`.
+double
+meanMoveNear(const Cloud& a, const Cloud& b, int edge_u)
+{
+  double sum = 0;
+  int count = 0;
+  for (unsigned v = 0; v < a.height; ++v)
+    for (int u = edge_u - 2; u <= edge_u + 1; ++u) {
+      sum += (a.at(u, v).getVector3fMap() - b.at(u, v).getVector3fMap()).norm();
+      ++count;
+    }
+  return sum / count;
+}
+
+void
+expectSharperThanBilateral(const Cloud& in, int edge_u)
+{
+  FilterParameters p = FilterParameters::paper();
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setParameters(p);
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud nlm;
+  f.filter(nlm);
+  // Plain bilateral weighting: the same d, similarity weights switched off (Phi_s = 1).
+  p.distance_bandwidth = f.getEstimatedDistanceBandwidth();
+  p.similarity_bandwidth = 1e6f;
+  const Cloud bilateral = filtered(in, p);
+  const double nlm_move = meanMoveNear(nlm, in, edge_u);
+  const double bilateral_move = meanMoveNear(bilateral, in, edge_u);
+  EXPECT_LT(nlm_move, 0.7 * bilateral_move) << nlm_move << " vs " << bilateral_move;
+}
+} // namespace
+
+TEST(NonLocalMeansFilter, StepEdgeStaysSharp)
+{
+  expectSharperThanBilateral(test::makeCloud(40, 30, test::step(20, 1.0, 1.03), 0.002, 3), 20);
+}
+
+TEST(NonLocalMeansFilter, CreaseStaysSharp)
+{
+  // Two planes meeting at the centre column (19.5): a ridge.
+  expectSharperThanBilateral(test::makeCloud(40, 30, test::crease(20, 1.0, 1.5), 0.002, 3), 20);
+}
+
+TEST(NonLocalMeansFilter, ScaleEquivariance)
+{
+  Cloud in = noisyPlane(0.004, 2);
+  test::punchHoles(in, 0.05, 3);
+  Cloud scaled = in;
+  const float lambda = 1000.0f; // metres -> millimetres
+  for (auto& q : scaled)
+    q.getVector3fMap() *= lambda;
+  for (const FilterParameters& p : {FilterParameters::paper(), FilterParameters::recommended()}) {
+    Cloud a = filtered(in, p);
+    const Cloud b = filtered(scaled, p);
+    for (auto& q : a)
+      q.getVector3fMap() *= lambda;
+    EXPECT_LT(maxDistance(a, b), 1e-3 * 0.004 * lambda) << p.normal_presmooth_window;
+  }
+}
+
+TEST(NonLocalMeansFilter, RigidMotionEquivariance)
+{
+  Cloud in = test::makeCloud(40, 30, test::step(20, 1.0, 1.05), 0.003, 6);
+  test::punchHoles(in, 0.05, 7);
+  Eigen::Affine3f motion = Eigen::Affine3f::Identity();
+  motion.rotate(Eigen::AngleAxisf(0.4f, Eigen::Vector3f(1, 2, 3).normalized()));
+  motion.translation() << 0.3f, -0.2f, 0.5f;
+  Cloud moved;
+  pcl::transformPointCloud(in, moved, motion);
+  moved.sensor_origin_ = Eigen::Vector4f(0.3f, -0.2f, 0.5f, 0.0f); // the sensor moves with the data
+  for (const FilterParameters& p : {FilterParameters::paper(), FilterParameters::recommended()}) {
+    const Cloud a = filtered(in, p);
+    Cloud a_moved;
+    pcl::transformPointCloud(a, a_moved, motion);
+    const Cloud b = filtered(moved, p);
+    EXPECT_LT(maxDistance(a_moved, b), 1e-5);
+  }
+}
+
+TEST(NonLocalMeansFilter, NaNsStayNaNAndNeverContribute)
+{
+  Cloud in = noisyPlane(0.004, 8);
+  test::punchHoles(in, 0.2, 9);
+  const Cloud out = filtered(in, FilterParameters::recommended());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    EXPECT_EQ(std::isnan(in[i].x), std::isnan(out[i].x));
+    EXPECT_EQ(std::isnan(in[i].y), std::isnan(out[i].y));
+    EXPECT_EQ(std::isnan(in[i].z), std::isnan(out[i].z));
+  }
+  EXPECT_FALSE(out.is_dense);
+  // Replacing NaN points by far-away garbage that is then NaN again changes nothing: a NaN point
+  // has no influence on its neighbours.
+  Cloud other = in;
+  for (std::size_t i = 0; i < other.size(); ++i)
+    if (std::isnan(in[i].z))
+      other[i].x = std::nanf(""), other[i].y = 5.0f, other[i].z = 7.0f; // x NaN: still invalid
+  EXPECT_EQ(maxDistance(filtered(other, FilterParameters::recommended()), out), 0.0);
+}
+
+TEST(NonLocalMeansFilter, IndicesLimitWhichPointsMove)
+{
+  const Cloud in = noisyPlane(0.004, 10);
+  pcl::IndicesPtr indices(new pcl::Indices);
+  for (int i = 0; i < static_cast<int>(in.size()); i += 3)
+    indices->push_back(i);
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  f.setIndices(indices);
+  Cloud out;
+  f.filter(out);
+  ASSERT_EQ(out.size(), in.size());
+  const Cloud all = filtered(in, FilterParameters::recommended());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    if (i % 3 == 0)
+      EXPECT_EQ(out[i].getVector3fMap(), all[i].getVector3fMap());
+    else
+      EXPECT_EQ(out[i].getVector3fMap(), in[i].getVector3fMap());
+  }
+  indices->push_back(static_cast<int>(in.size()) + 4);
+  f.setIndices(indices);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("outside the cloud"), std::string::npos);
+}
+
+TEST(NonLocalMeansFilter, InPlaceEqualsOutOfPlace)
+{
+  const Cloud in = noisyPlane(0.004, 11);
+  const Cloud expected = filtered(in, FilterParameters::recommended());
+  Cloud::Ptr cloud(new Cloud(in));
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setInputCloud(cloud);
+  f.filter(*cloud);
+  EXPECT_EQ(maxDistance(*cloud, expected), 0.0);
+  EXPECT_EQ(cloud->width, in.width);
+  EXPECT_EQ(cloud->height, in.height);
+}
+
+TEST(NonLocalMeansFilter, ThreadCountDoesNotChangeOutput)
+{
+  Cloud in = test::makeCloud(70, 50, test::step(33, 1.0, 1.04), 0.004, 12);
+  test::punchHoles(in, 0.1, 13);
+  for (Evaluation e : {Evaluation::fast, Evaluation::direct}) {
+    FilterParameters p = FilterParameters::recommended();
+    p.evaluation = e;
+    p.threads = 1;
+    const Cloud one = filtered(in, p);
+    p.threads = 2;
+    const Cloud two = filtered(in, p);
+    p.threads = 3;
+    const Cloud three = filtered(in, p);
+    EXPECT_EQ(maxDistance(one, two), 0.0);
+    EXPECT_EQ(maxDistance(one, three), 0.0);
+  }
+}
+
+TEST(NonLocalMeansFilter, KeepsHeaderPoseAndSizes)
+{
+  Cloud in = noisyPlane(0.004, 14);
+  in.header.frame_id = "camera_depth";
+  in.header.stamp = 123456;
+  in.sensor_origin_ = Eigen::Vector4f(0.01f, 0.02f, -0.03f, 0.0f);
+  in.sensor_orientation_ = Eigen::Quaternionf(0.9f, 0.1f, 0.3f, 0.2f).normalized();
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud out;
+  f.filter(out);
+  EXPECT_EQ(out.header.frame_id, "camera_depth");
+  EXPECT_EQ(out.header.stamp, 123456u);
+  EXPECT_EQ(out.sensor_origin_, in.sensor_origin_);
+  EXPECT_EQ(out.sensor_orientation_.coeffs(), in.sensor_orientation_.coeffs());
+  EXPECT_EQ(out.width, in.width);
+  EXPECT_EQ(out.height, in.height);
+  EXPECT_TRUE(out.is_dense);
+  EXPECT_GT(f.getEstimatedDistanceBandwidth(), 0.0f);
+  EXPECT_GT(f.getEstimatedSimilarityBandwidth(), 0.0f);
+}
+
+TEST(NonLocalMeansFilter, PointsMoveOnlyAlongTheirNormal)
+{
+  // Each displacement is parallel to the point's estimated normal (no drift along the surface).
+  Cloud in = test::makeCloud(40, 30, test::step(20, 1.0, 1.05), 0.004, 15);
+  const FilterParameters p = FilterParameters::paper();
+  const Cloud out = filtered(in, p);
+  const Grid grid = Grid::fromInterleaved(&in[0].x, 40, 30, 4);
+  const NormalField normals = estimateNormals(grid, p.normal_window, Viewpoint{0, 0, 0}, 1);
+  int checked = 0;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const Eigen::Vector3f d = out[i].getVector3fMap() - in[i].getVector3fMap();
+    if (d.norm() < 1e-5f)
+      continue;
+    const Eigen::Vector3f n(normals.nx[i], normals.ny[i], normals.nz[i]);
+    EXPECT_GT(std::fabs(d.normalized().dot(n)), 0.9999f);
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(NonLocalMeansFilter, BadInputGivesClearErrors)
+{
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  Cloud out;
+  Cloud::Ptr unorganized(new Cloud);
+  unorganized->push_back(pcl::PointXYZ(0, 0, 1));
+  unorganized->push_back(pcl::PointXYZ(0, 1, 1));
+  f.setInputCloud(unorganized);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("not organized"), std::string::npos);
+
+  Cloud::Ptr small(new Cloud(noisyPlane(0.001, 1, 6, 6)));
+  f.setInputCloud(small);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("search_window = 7 is larger than the cloud (6 x 6)"),
+            std::string::npos);
+
+  Cloud::Ptr cloud(new Cloud(noisyPlane(0.001)));
+  f.setInputCloud(cloud);
+  f.setSearchWindowSize(4);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("search_window = 4"), std::string::npos);
+  f.setSearchWindowSize(7);
+  f.setPatchSize(-1);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("patch_size = -1"), std::string::npos);
+  f.setPatchSize(5);
+
+  Cloud::Ptr nan_cloud(new Cloud(*cloud));
+  for (auto& q : *nan_cloud)
+    q.x = q.y = q.z = std::nanf("");
+  f.setInputCloud(nan_cloud);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("no valid point"), std::string::npos);
+
+  Cloud::Ptr inf_cloud(new Cloud(*cloud));
+  (*inf_cloud)[5].z = INFINITY;
+  f.setInputCloud(inf_cloud);
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("infinite coordinate at pixel (5, 0)"), std::string::npos);
+}
+
+// Every instantiated point type: same geometry as PointXYZ, every other field untouched.
+template <typename PointT>
+class PointTypes : public ::testing::Test
+{};
+using InstantiatedTypes = ::testing::Types<pcl::PointXYZ, pcl::PointXYZI, pcl::PointXYZRGB, pcl::PointXYZRGBA,
+                                           pcl::PointNormal, pcl::PointXYZRGBNormal>;
+TYPED_TEST_SUITE(PointTypes, InstantiatedTypes);
+
+namespace
+{
+template <typename PointT>
+void
+decorate(PointT&, std::size_t)
+{}
+void
+decorate(pcl::PointXYZI& p, std::size_t i)
+{
+  p.intensity = float(i % 97);
+}
+void
+decorate(pcl::PointXYZRGB& p, std::size_t i)
+{
+  p.r = std::uint8_t(i), p.g = std::uint8_t(i * 3), p.b = std::uint8_t(i * 7);
+}
+void
+decorate(pcl::PointXYZRGBA& p, std::size_t i)
+{
+  p.r = std::uint8_t(i), p.g = std::uint8_t(i * 3), p.b = std::uint8_t(i * 7), p.a = std::uint8_t(i * 11);
+}
+void
+decorate(pcl::PointNormal& p, std::size_t i)
+{
+  p.normal_x = float(i), p.normal_y = 0.5f, p.normal_z = -1.0f, p.curvature = 0.25f;
+}
+void
+decorate(pcl::PointXYZRGBNormal& p, std::size_t i)
+{
+  p.rgba = std::uint32_t(i * 2654435761u);
+  p.normal_x = float(i), p.normal_y = 0.5f, p.normal_z = -1.0f, p.curvature = 0.25f;
+}
+} // namespace
+
+TYPED_TEST(PointTypes, FiltersGeometryAndKeepsOtherFields)
+{
+  Cloud xyz = noisyPlane(0.004, 16, 30, 24);
+  test::punchHoles(xyz, 0.1, 17);
+  typename pcl::PointCloud<TypeParam>::Ptr in(new pcl::PointCloud<TypeParam>(xyz.width, xyz.height));
+  for (std::size_t i = 0; i < xyz.size(); ++i) {
+    (*in)[i].x = xyz[i].x, (*in)[i].y = xyz[i].y, (*in)[i].z = xyz[i].z;
+    decorate((*in)[i], i);
+  }
+  in->is_dense = false;
+  NonLocalMeansFilter<TypeParam> f;
+  f.setInputCloud(in);
+  pcl::PointCloud<TypeParam> out;
+  f.filter(out);
+  const Cloud expected = filtered(xyz, FilterParameters::recommended());
+  ASSERT_EQ(out.size(), in->size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    TypeParam ref = (*in)[i];
+    ref.x = expected[i].x, ref.y = expected[i].y, ref.z = expected[i].z;
+    EXPECT_EQ(std::memcmp(&ref, &out[i], sizeof(TypeParam)), 0) << "point " << i;
+  }
+  EXPECT_FALSE(out.is_dense);
+}

@@ -1,0 +1,88 @@
+#include <range_nlm/parameters.h>
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <string>
+
+using range_nlm::FilterParameters;
+
+namespace
+{
+std::string
+messageOf(const FilterParameters& p, int w = 0, int h = 0)
+{
+  try {
+    if (w > 0)
+      p.validateFor(w, h);
+    else
+      p.validate();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+} // namespace
+
+TEST(Parameters, DefaultsAreValidAndDocumentedValues)
+{
+  const FilterParameters p;
+  EXPECT_EQ(p.search_window, 7);
+  EXPECT_EQ(p.patch_size, 5);
+  EXPECT_EQ(p.iterations, 1);
+  EXPECT_EQ(p.distance_bandwidth, FilterParameters::automatic);
+  EXPECT_EQ(p.similarity_bandwidth, FilterParameters::automatic);
+  EXPECT_NO_THROW(p.validate());
+  EXPECT_NO_THROW(FilterParameters::recommended().validate());
+  EXPECT_NO_THROW(FilterParameters::paper().validate());
+}
+
+TEST(Parameters, EvenOrNonPositiveWindowsAreRejectedByName)
+{
+  FilterParameters p;
+  p.search_window = 6;
+  EXPECT_NE(messageOf(p).find("search_window = 6"), std::string::npos);
+  p = FilterParameters();
+  p.patch_size = 0;
+  EXPECT_NE(messageOf(p).find("patch_size = 0"), std::string::npos);
+  p = FilterParameters();
+  p.patch_size = -3;
+  EXPECT_NE(messageOf(p).find("patch_size = -3"), std::string::npos);
+  p = FilterParameters();
+  p.normal_window = 4;
+  EXPECT_NE(messageOf(p).find("normal_window = 4"), std::string::npos);
+}
+
+TEST(Parameters, OtherInvalidValuesAreRejectedByName)
+{
+  FilterParameters p;
+  p.iterations = 0;
+  EXPECT_NE(messageOf(p).find("iterations"), std::string::npos);
+  p = FilterParameters();
+  p.threads = -1;
+  EXPECT_NE(messageOf(p).find("threads"), std::string::npos);
+  p = FilterParameters();
+  p.distance_bandwidth = -0.5f;
+  EXPECT_NE(messageOf(p).find("distance_bandwidth"), std::string::npos);
+  p = FilterParameters();
+  p.similarity_bandwidth = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_NE(messageOf(p).find("similarity_bandwidth"), std::string::npos);
+  p = FilterParameters();
+  p.bandwidth_samples = 0;
+  EXPECT_NE(messageOf(p).find("bandwidth_samples"), std::string::npos);
+}
+
+TEST(Parameters, WindowLargerThanCloudIsRejected)
+{
+  FilterParameters p;
+  p.search_window = 9;
+  EXPECT_NE(messageOf(p, 8, 20).find("larger than the cloud (8 x 20)"), std::string::npos);
+  EXPECT_EQ(messageOf(p, 9, 9), "");
+}
+
+TEST(Parameters, Presets)
+{
+  EXPECT_EQ(FilterParameters::preset("paper").normal_window, 3);
+  EXPECT_EQ(FilterParameters::preset("paper").normal_presmooth_window, 0);
+  EXPECT_THROW(FilterParameters::preset("fancy"), std::invalid_argument);
+}

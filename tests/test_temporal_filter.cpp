@@ -1,0 +1,240 @@
+#include "test_support.h"
+
+#include <range_nlm/nonlocal_means_filter.h>
+#include <range_nlm/temporal_nonlocal_means_filter.h>
+#include <range_nlm/temporal_stream.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <deque>
+
+using namespace range_nlm;
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+namespace
+{
+double
+maxDistance(const Cloud& a, const Cloud& b)
+{
+  double m = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (std::isnan(a[i].z) != std::isnan(b[i].z))
+      return INFINITY;
+    if (!std::isnan(a[i].z))
+      m = std::max(m, double((a[i].getVector3fMap() - b[i].getVector3fMap()).norm()));
+  }
+  return m;
+}
+
+/// A scene with a box (depth 1.0 m) in front of a wall (1.1 m); the box starts at column
+/// `box_u` (moving scenes shift it per frame).
+test::DepthFunction
+boxScene(int box_u)
+{
+  return [box_u](double, double, int u, int v) {
+    return (u >= box_u && u < box_u + 14 && v >= 10 && v < 30) ? 1.0 : 1.1 + 0.0 * u;
+  };
+}
+
+std::vector<Cloud::ConstPtr>
+sequence(int frames, int shift_per_frame, double sigma, std::uint64_t seed)
+{
+  std::vector<Cloud::ConstPtr> out;
+  for (int k = 0; k < frames; ++k)
+    out.emplace_back(new Cloud(test::makeCloud(48, 40, boxScene(12 + k * shift_per_frame), sigma, seed + k)));
+  return out;
+}
+
+Cloud
+staticFilter(const Cloud& in, const FilterParameters& p)
+{
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setParameters(p);
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud out;
+  f.filter(out);
+  return out;
+}
+
+/// Mean over pixels of the temporal standard deviation of z.
+double
+temporalStd(const std::vector<Cloud::Ptr>& frames, std::size_t first, std::size_t last)
+{
+  double sum = 0.0;
+  std::size_t n = frames.front()->size();
+  for (std::size_t i = 0; i < n; ++i) {
+    double m = 0, m2 = 0;
+    for (std::size_t k = first; k <= last; ++k) {
+      m += (*frames[k])[i].z;
+      m2 += double((*frames[k])[i].z) * (*frames[k])[i].z;
+    }
+    const double c = double(last - first + 1);
+    sum += std::sqrt(std::max(0.0, m2 / c - (m / c) * (m / c)));
+  }
+  return sum / n;
+}
+} // namespace
+
+TEST(TemporalFilter, OneFrameEqualsStaticFilter)
+{
+  Cloud in = test::makeCloud(40, 32, boxScene(10), 0.003, 3);
+  test::punchHoles(in, 0.05, 4);
+  for (const FilterParameters& p : {FilterParameters::paper(), FilterParameters::recommended()}) {
+    TemporalNonLocalMeansFilter<pcl::PointXYZ> t;
+    t.setParameters(p);
+    t.setFrames({Cloud::ConstPtr(new Cloud(in))}, 0);
+    Cloud out;
+    t.filter(out);
+    EXPECT_LT(maxDistance(out, staticFilter(in, p)), 1e-7);
+    ASSERT_EQ(t.getFrameWeights().size(), 1u);
+  }
+}
+
+TEST(TemporalFilter, FrameWeightsFollowTheFormulas)
+{
+  // A plane: without depth edges the estimated s follows the noise level.
+  const auto plane = test::plane(Eigen::Vector3d(0.1, 0.2, 1.0), 1.0);
+  const std::vector<Cloud::ConstPtr> frames{Cloud::ConstPtr(new Cloud(test::makeCloud(48, 40, plane, 0.003, 10))),
+                                            Cloud::ConstPtr(new Cloud(test::makeCloud(48, 40, plane, 0.003, 11)))};
+  Cloud::Ptr noisier(new Cloud(test::makeCloud(48, 40, plane, 0.006, 99)));
+  TemporalNonLocalMeansFilter<pcl::PointXYZ> t;
+  t.setFrames({frames[0], frames[1], noisier}, 1);
+  Cloud out;
+  t.filter(out);
+  const auto& w = t.getFrameWeights();
+  const auto& b = t.getFrameBandwidths();
+  ASSERT_EQ(w.size(), 3u);
+  const float s_max = std::max({b[0].similarity, b[1].similarity, b[2].similarity});
+  EXPECT_EQ(s_max, b[2].similarity); // the noisier frame has the largest s
+  for (int k = 0; k < 3; ++k) {
+    const float psi_d = k == 1 ? 1.0f : 0.5f;
+    const float ratio = b[k].similarity / s_max;
+    EXPECT_FLOAT_EQ(w[k], psi_d * std::exp(-ratio * ratio)) << k;
+  }
+  EXPECT_LT(w[2], w[0]); // noisier frames count less
+}
+
+TEST(TemporalFilter, StreamWindowsAtSequenceStartAndEnd)
+{
+  const auto frames = sequence(5, 0, 0.003, 20);
+  TemporalStream<pcl::PointXYZ> stream(2, false, FilterParameters::recommended());
+  std::vector<std::size_t> window_sizes;
+  std::size_t produced = 0;
+  for (const auto& f : frames) {
+    const auto ready = stream.push(f);
+    produced += ready.size();
+    if (!ready.empty())
+      window_sizes.push_back(stream.lastFrameWeights().size());
+    EXPECT_LE(stream.heldFrames(), 5u);
+  }
+  EXPECT_EQ(produced, 3u); // frames 0, 1, 2 are complete once frame t + 2 arrived
+  EXPECT_EQ(window_sizes, (std::vector<std::size_t>{3, 4, 5}));
+  produced += stream.flush().size();
+  EXPECT_EQ(produced, 5u);
+  EXPECT_EQ(stream.lastFrameWeights().size(), 3u); // frame 4 sees frames 2, 3, 4
+  EXPECT_EQ(stream.heldFrames(), 0u);
+}
+
+TEST(TemporalFilter, StreamingEqualsBatchAndDirectCalls)
+{
+  const auto frames = sequence(4, 0, 0.003, 30);
+  const FilterParameters p = FilterParameters::recommended();
+  const auto batch = filterSequence<pcl::PointXYZ>(frames, 1, false, p);
+  ASSERT_EQ(batch.size(), 4u);
+  for (std::size_t t = 0; t < 4; ++t) {
+    std::deque<Cloud::ConstPtr> window;
+    const std::size_t lo = t == 0 ? 0 : t - 1, hi = std::min<std::size_t>(3, t + 1);
+    for (std::size_t k = lo; k <= hi; ++k)
+      window.push_back(frames[k]);
+    TemporalNonLocalMeansFilter<pcl::PointXYZ> f;
+    f.setParameters(p);
+    f.setFrames(window, t - lo);
+    Cloud out;
+    f.filter(out);
+    EXPECT_EQ(maxDistance(out, *batch[t]), 0.0) << t;
+  }
+}
+
+TEST(TemporalFilter, CausalModeUsesNoFutureFrame)
+{
+  auto frames = sequence(4, 0, 0.003, 40);
+  const FilterParameters p = FilterParameters::recommended();
+  TemporalStream<pcl::PointXYZ> stream(1, true, p);
+  const auto first = stream.push(frames[0]);
+  ASSERT_EQ(first.size(), 1u); // no delay
+  const auto second = stream.push(frames[1]);
+  ASSERT_EQ(second.size(), 1u);
+  // Replace the future (frame 2 and 3) with something else: frames 0 and 1 do not change.
+  auto other = frames;
+  other[2].reset(new Cloud(test::makeCloud(48, 40, boxScene(30), 0.01, 77)));
+  other[3].reset(new Cloud(test::makeCloud(48, 40, boxScene(5), 0.01, 78)));
+  const auto a = filterSequence<pcl::PointXYZ>(frames, 1, true, p);
+  const auto b = filterSequence<pcl::PointXYZ>(other, 1, true, p);
+  EXPECT_EQ(maxDistance(*a[0], *b[0]), 0.0);
+  EXPECT_EQ(maxDistance(*a[1], *b[1]), 0.0);
+  EXPECT_EQ(maxDistance(*a[0], *first[0]), 0.0);
+  EXPECT_GT(maxDistance(*a[2], *b[2]), 0.0);
+}
+
+TEST(TemporalFilter, StaticSceneIsTemporallySteadier)
+{
+  const auto frames = sequence(7, 0, 0.004, 50);
+  const FilterParameters p = FilterParameters::recommended();
+  const auto temporal = filterSequence<pcl::PointXYZ>(frames, 1, false, p);
+  std::vector<Cloud::Ptr> single;
+  for (const auto& f : frames)
+    single.emplace_back(new Cloud(staticFilter(*f, p)));
+  const double jitter_single = temporalStd(single, 1, 5);
+  const double jitter_temporal = temporalStd(temporal, 1, 5);
+  EXPECT_LT(jitter_temporal, 0.8 * jitter_single) << jitter_temporal << " vs " << jitter_single;
+}
+
+TEST(TemporalFilter, MovingObjectIsNotSmeared)
+{
+  const double sigma = 0.003;
+  const auto frames = sequence(5, 4, sigma, 60); // 4 px per frame: far beyond the noise
+  const FilterParameters p = FilterParameters::recommended();
+  const auto temporal = filterSequence<pcl::PointXYZ>(frames, 1, false, p);
+  // Error of z against the true depth within 3 px of the box's vertical edges.
+  auto edgeError = [&](const Cloud& c, int k) {
+    const int box_u = 12 + 4 * k;
+    double sum = 0;
+    int n = 0;
+    for (int v = 12; v < 28; ++v)
+      for (int u : {box_u - 3, box_u - 2, box_u - 1, box_u, box_u + 1, box_u + 2, box_u + 11, box_u + 12,
+                    box_u + 13, box_u + 14, box_u + 15, box_u + 16}) {
+        const double truth = (u >= box_u && u < box_u + 14) ? 1.0 : 1.1;
+        const double e = c.at(u, v).z - truth;
+        sum += e * e;
+        ++n;
+      }
+    return std::sqrt(sum / n);
+  };
+  for (int k = 1; k < 4; ++k) {
+    const double per_frame = edgeError(staticFilter(*frames[k], p), k);
+    const double with_time = edgeError(*temporal[k], k);
+    EXPECT_LT(with_time, per_frame * 1.15 + 0.0002) << "frame " << k;
+  }
+}
+
+TEST(TemporalFilter, MismatchedFrameSizesAreRejected)
+{
+  const auto frames = sequence(2, 0, 0.003, 70);
+  Cloud::Ptr other(new Cloud(test::makeCloud(40, 40, boxScene(12), 0.003, 71)));
+  TemporalNonLocalMeansFilter<pcl::PointXYZ> t;
+  t.setFrames({frames[0], other, frames[1]}, 0);
+  Cloud out;
+  try {
+    t.filter(out);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("frame 1 is 40 x 40 but the current frame is 48 x 40"), std::string::npos)
+        << e.what();
+  }
+  TemporalStream<pcl::PointXYZ> stream(1, false, FilterParameters::recommended());
+  stream.push(frames[0]);
+  EXPECT_THROW(stream.push(other), std::invalid_argument);
+  EXPECT_THROW(t.setFrames({frames[0]}, 3), std::invalid_argument);
+  EXPECT_THROW(TemporalStream<pcl::PointXYZ>(-1, false, FilterParameters()), std::invalid_argument);
+}
