@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs the Debian packages range_nlm needs (if missing) and builds it (Release) in build/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+packages=(cmake g++ make libpcl-dev pcl-tools libeigen3-dev libflann-dev libboost-program-options-dev
+          libgtest-dev libpng-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  SUDO=""
+  [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  $SUDO apt-get update
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j2
