@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cassert>
@@ -157,7 +158,6 @@ meanCurvature(const Grid& grid, const RenderParameters& parameters)
 {
   parameters.validate();
   checkGrid(grid, "mean curvature");
-  const NormalField normals = estimateNormals(grid, parameters.normal_window, parameters.viewpoint, parameters.threads);
   const int width = grid.width, height = grid.height;
   const int r = parameters.curvature_window / 2;
   const Viewpoint& o = parameters.viewpoint;
@@ -175,25 +175,15 @@ meanCurvature(const Grid& grid, const RenderParameters& parameters)
 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (int v = 0; v < height; ++v) {
-    // Local coordinates of the neighbours: tangent x, y and height h along the normal.
-    std::vector<double> lx, ly, lh;
-    lx.reserve((2 * r + 1) * (2 * r + 1));
-    ly.reserve(lx.capacity());
-    lh.reserve(lx.capacity());
+    // Offsets q_j = p_j - p_i of the neighbours that pass the depth-discontinuity test.
+    std::vector<Eigen::Vector3d> offsets;
+    offsets.reserve((2 * r + 1) * (2 * r + 1));
     for (int u = 0; u < width; ++u) {
       const int i = v * width + u;
-      if (!grid.valid[i] || !std::isfinite(normals.nx[i]))
+      if (!grid.valid[i])
         continue;
-      const Eigen::Vector3d n(normals.nx[i], normals.ny[i], normals.nz[i]);
-      // Tangent frame: the axis least aligned with n, made orthogonal to it.
-      int k = 0;
-      for (int a = 1; a < 3; ++a)
-        if (std::fabs(n[a]) < std::fabs(n[k]))
-          k = a;
-      const Eigen::Vector3d t1 = n.cross(Eigen::Vector3d::Unit(k)).normalized();
-      const Eigen::Vector3d t2 = n.cross(t1);
-      lx.clear(), ly.clear(), lh.clear();
-      double spread = 0.0;
+      offsets.clear();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv)
         for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
           const int j = jv * width + ju;
@@ -202,22 +192,44 @@ meanCurvature(const Grid& grid, const RenderParameters& parameters)
           const int ring = std::max(std::abs(ju - u), std::abs(jv - v));
           if (std::fabs(rho[j] - rho[i]) > step * rho[i] * ring)
             continue;
-          const Eigen::Vector3d q(double(grid.x[j]) - grid.x[i], double(grid.y[j]) - grid.y[i],
-                                  double(grid.z[j]) - grid.z[i]);
-          lx.push_back(q.dot(t1));
-          ly.push_back(q.dot(t2));
-          lh.push_back(q.dot(n));
-          spread += lx.back() * lx.back() + ly.back() * ly.back();
+          offsets.emplace_back(double(grid.x[j]) - grid.x[i], double(grid.y[j]) - grid.y[i],
+                               double(grid.z[j]) - grid.z[i]);
+          sum += offsets.back();
         }
-      const std::size_t count = lx.size();
-      if (count < 10 || !(spread > 0.0))
+      const std::size_t count = offsets.size();
+      if (count < 10)
+        continue;
+      // Local frame: the least-squares plane of the same neighbours, its normal toward the viewer.
+      const Eigen::Vector3d mean = sum / double(count);
+      Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+      for (const Eigen::Vector3d& q : offsets)
+        covariance += (q - mean) * (q - mean).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+      if (eigen.info() != Eigen::Success)
+        continue;
+      Eigen::Vector3d n = eigen.eigenvectors().col(0);
+      const Eigen::Vector3d to_viewer(double(o[0]) - grid.x[i], double(o[1]) - grid.y[i], double(o[2]) - grid.z[i]);
+      if (n.dot(to_viewer) < 0.0)
+        n = -n;
+      int k = 0; // the axis least aligned with n, made orthogonal to it
+      for (int a = 1; a < 3; ++a)
+        if (std::fabs(n[a]) < std::fabs(n[k]))
+          k = a;
+      const Eigen::Vector3d t1 = n.cross(Eigen::Vector3d::Unit(k)).normalized();
+      const Eigen::Vector3d t2 = n.cross(t1);
+      double spread = 0.0;
+      for (const Eigen::Vector3d& q : offsets) {
+        const double x = q.dot(t1), y = q.dot(t2);
+        spread += x * x + y * y;
+      }
+      if (!(spread > 0.0))
         continue;
       // Fit in coordinates scaled to unit RMS spread, so the normal equations are well conditioned.
       const double s = std::sqrt(spread / double(count));
       Eigen::Matrix<double, 6, 6> normal_matrix = Eigen::Matrix<double, 6, 6>::Zero();
       Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-      for (std::size_t m = 0; m < count; ++m) {
-        const double x = lx[m] / s, y = ly[m] / s, h = lh[m] / s;
+      for (const Eigen::Vector3d& q : offsets) {
+        const double x = q.dot(t1) / s, y = q.dot(t2) / s, h = q.dot(n) / s;
         Eigen::Matrix<double, 6, 1> phi;
         phi << x * x, x * y, y * y, x, y, 1.0;
         normal_matrix.selfadjointView<Eigen::Lower>().rankUpdate(phi);
@@ -229,9 +241,9 @@ meanCurvature(const Grid& grid, const RenderParameters& parameters)
       const Eigen::Matrix<double, 6, 1> c = ldlt.solve(rhs);
       const double a = c[0], b = c[1], cc = c[2], d = c[3], e = c[4];
       const double g = 1.0 + d * d + e * e;
-      const double mean = -((1.0 + e * e) * 2.0 * a - 2.0 * d * e * b + (1.0 + d * d) * 2.0 * cc) /
-                          (2.0 * g * std::sqrt(g));
-      const double value = mean / s;
+      const double mean_curvature =
+          -((1.0 + e * e) * 2.0 * a - 2.0 * d * e * b + (1.0 + d * d) * 2.0 * cc) / (2.0 * g * std::sqrt(g));
+      const double value = mean_curvature / s;
       if (std::isfinite(value))
         curvature[i] = static_cast<float>(value);
     }
@@ -308,9 +320,22 @@ renderShaded(const Grid& grid, const RenderParameters& parameters)
 
 namespace
 {
-RgbImage
-curvatureImage(const Grid& grid, const std::vector<float>& curvature, float limit, const RenderParameters& parameters)
+void
+checkLimit(float limit)
 {
+  if (!(std::isfinite(limit) && limit > 0.0f))
+    throw std::invalid_argument("curvature limit must be a positive number, got " + numberText(limit));
+}
+} // namespace
+
+RgbImage
+curvatureToImage(const Grid& grid, const std::vector<float>& curvature, float limit, const RenderParameters& parameters)
+{
+  checkLimit(limit);
+  checkGrid(grid, "curvature image");
+  if (curvature.size() != grid.size())
+    throw std::invalid_argument("curvature image: " + std::to_string(curvature.size()) + " values for a grid of " +
+                                std::to_string(grid.size()) + " points");
   RgbImage image(grid.width, grid.height, parameters.background);
   for (int v = 0; v < grid.height; ++v)
     for (int u = 0; u < grid.width; ++u) {
@@ -322,20 +347,12 @@ curvatureImage(const Grid& grid, const std::vector<float>& curvature, float limi
   return image;
 }
 
-void
-checkLimit(float limit)
-{
-  if (!(std::isfinite(limit) && limit > 0.0f))
-    throw std::invalid_argument("curvature limit must be a positive number, got " + numberText(limit));
-}
-} // namespace
-
 RgbImage
 renderCurvature(const Grid& grid, float limit, const RenderParameters& parameters)
 {
   checkLimit(limit);
   const std::vector<float> curvature = meanCurvature(grid, parameters);
-  return curvatureImage(grid, curvature, limit, parameters);
+  return curvatureToImage(grid, curvature, limit, parameters);
 }
 
 RgbImage
@@ -387,8 +404,8 @@ renderBeforeAfter(const Grid& before, const Grid& after, RenderMode mode, const 
     }
   }
   result.curvature_limit = limit;
-  result.image = sideBySide(curvatureImage(before, h_before, limit, parameters),
-                            curvatureImage(after, h_after, limit, parameters), parameters.gap, parameters.gap_colour);
+  result.image = sideBySide(curvatureToImage(before, h_before, limit, parameters),
+                            curvatureToImage(after, h_after, limit, parameters), parameters.gap, parameters.gap_colour);
   return result;
 }
 

@@ -2,6 +2,7 @@
 // with the temporal filter, in one or several passes), keeping every field of the input.
 #include "tool_common.h"
 
+#include <range_nlm/render.h>
 #include <range_nlm/temporal_stream.h>
 
 #include <deque>
@@ -24,7 +25,10 @@ const char* const kUsage =
     "  range_nlm_denoise --input-dir DIR --output-dir DIR --pass search=19,patch=11,radius=1 --pass "
     "search=11,patch=5,radius=0\n"
     "Filters organized range frames with the feature-preserving non-local filter. Every field of\n"
-    "the input is kept; only x, y, z move. Outputs are binary PCD.";
+    "the input is kept; only x, y, z move. Outputs are binary PCD.\n"
+    "16-bit depth PNGs (INPUT.png, or a directory of *.png) are read with the intrinsics options;\n"
+    "--output-format png writes 16-bit depth PNGs with the same depth scale, --colorize curvature\n"
+    "writes PointXYZRGB clouds coloured by mean curvature.";
 
 /// One filter pass of a schedule: parameters and temporal radius.
 struct Pass
@@ -127,9 +131,64 @@ private:
   std::vector<std::unique_ptr<TemporalStream<pcl::PointXYZ>>> streams_;
 };
 
-void
-writeResult(PendingFrame& frame, const Cloud& result)
+/// How results are written: the input's fields (PCD), curvature colour (PCD) or 16-bit depth (PNG).
+struct OutputOptions
 {
+  bool png = false;
+  bool colorize = false;
+  RenderParameters colour;
+  double depth_scale = DepthIntrinsics().depth_scale;
+};
+
+OutputOptions
+outputOptionsFrom(const po::variables_map& vm, bool single, const std::string& first_input,
+                  const std::string& single_output, const DepthIntrinsics& intrinsics)
+{
+  OutputOptions out;
+  const std::string format = vm["output-format"].as<std::string>();
+  if (format == "png" || format == "pcd")
+    out.png = format == "png";
+  else if (format == "auto")
+    out.png = isDepthImagePath(single ? single_output : first_input);
+  else
+    throw UsageError("--output-format must be 'pcd', 'png' or 'auto', got '" + format + "'");
+  if (single && out.png != isDepthImagePath(single_output))
+    throw UsageError("output '" + single_output + "' does not match --output-format " + format +
+                     " (a PNG output must end in .png, a PCD output must not)");
+  if (vm.count("colorize")) {
+    const std::string what = vm["colorize"].as<std::string>();
+    if (what != "curvature")
+      throw UsageError("--colorize supports only 'curvature', got '" + what + "'");
+    if (out.png)
+      throw UsageError("--colorize writes PCD clouds; it cannot be combined with PNG output");
+    out.colorize = true;
+    out.colour.curvature_limit = vm["curvature-limit"].as<float>();
+    try {
+      out.colour.validate();
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--curvature-limit: ") + e.what());
+    }
+  }
+  out.depth_scale = intrinsics.depth_scale;
+  return out;
+}
+
+void
+writeResult(PendingFrame& frame, const Cloud& result, const OutputOptions& out)
+{
+  if (out.png) {
+    saveDepthPng(frame.output_path, result, out.depth_scale);
+    return;
+  }
+  if (out.colorize) {
+    RenderParameters colour = out.colour;
+    colour.viewpoint = {frame.loaded.origin[0], frame.loaded.origin[1], frame.loaded.origin[2]};
+    pcl::PointCloud<pcl::PointXYZRGB> coloured = colorizeByCurvature(result, colour);
+    coloured.sensor_origin_ = frame.loaded.origin;
+    coloured.sensor_orientation_ = frame.loaded.orientation;
+    saveCloudAtomic(frame.output_path, coloured);
+    return;
+  }
   writeXyzToBlob(result, frame.loaded.blob);
   saveCloudAtomic(frame.output_path, frame.loaded.blob, frame.loaded.origin, frame.loaded.orientation);
 }
@@ -151,18 +210,26 @@ run(int argc, char** argv)
   // clang-format off
   options.add_options()
     ("help,h", "print this help")
-    ("input", po::value<std::string>(), "input PCD file (single-frame mode)")
-    ("output", po::value<std::string>(), "output PCD file (single-frame mode)")
-    ("input-dir", po::value<std::string>(), "directory of *.pcd frames, filtered in name order")
+    ("input", po::value<std::string>(), "input PCD file or 16-bit depth PNG (single-frame mode)")
+    ("output", po::value<std::string>(), "output PCD file, or .png with PNG output (single-frame mode)")
+    ("input-dir", po::value<std::string>(), "directory of *.pcd frames (if it has none: *.png depth images), filtered in name order")
     ("output-dir", po::value<std::string>(), "directory for the filtered frames (same file names)")
     ("temporal-radius", po::value<int>()->default_value(0), "R: frames on each side used by the temporal filter (0 = static)")
     ("causal", "temporal window uses only past frames (no output delay)")
     ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
     ("overwrite", "allow the output directory to be the input directory")
     ("quiet,q", "print nothing but errors")
-    ("json", "print a JSON summary instead of per-frame lines");
+    ("json", "print a JSON summary instead of per-frame lines")
+    ("colorize", po::value<std::string>(),
+     "'curvature': write PointXYZRGB coloured by mean curvature instead of the input's fields [default: keep the fields]")
+    ("curvature-limit", po::value<float>()->default_value(0.0f),
+     "half-range of the --colorize colour scale, 1 / cloud unit (0 = 95th percentile of |H| of each frame)")
+    ("output-format", po::value<std::string>()->default_value("auto"),
+     "pcd or png (16-bit depth = round(z * --depth-scale); x, y are not stored, so use --line-of-sight); "
+     "auto = png for an OUTPUT.png, else the format of the input");
   // clang-format on
   addFilterOptions(options);
+  addDepthImageOptions(options);
   po::positional_options_description positional;
   positional.add("input", 1).add("output", 1);
   po::variables_map vm;
@@ -200,11 +267,17 @@ run(int argc, char** argv)
       throw UsageError("directory mode needs both --input-dir and --output-dir");
     const std::string in_dir = vm["input-dir"].as<std::string>();
     const std::string out_dir = vm["output-dir"].as<std::string>();
-    inputs = listFrames(in_dir);
+    inputs = listInputFrames(in_dir);
     prepareOutputDirectory(in_dir, out_dir, vm.count("overwrite") > 0);
     for (const std::string& in : inputs)
       outputs.push_back(joinPath(out_dir, fileName(in)));
   }
+  const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
+  const OutputOptions output_options =
+      outputOptionsFrom(vm, single, inputs.front(), single ? outputs.front() : std::string(), intrinsics);
+  if (!single)
+    for (std::string& output : outputs)
+      output = replaceExtension(output, output_options.png ? ".png" : ".pcd");
 
   PassChain chain(passes);
   std::deque<PendingFrame> pending;
@@ -216,7 +289,7 @@ run(int argc, char** argv)
     for (const Cloud::Ptr& result : results) {
       PendingFrame frame = std::move(pending.front());
       pending.pop_front();
-      writeResult(frame, *result);
+      writeResult(frame, *result, output_options);
       FrameReport report{fileName(frame.output_path), ms, chain.firstPassBandwidths()};
       printReport(report, quiet, json);
       reports.push_back(report);
@@ -224,7 +297,7 @@ run(int argc, char** argv)
     }
   };
   for (std::size_t f = 0; f < inputs.size(); ++f) {
-    PendingFrame frame{loadCloud(inputs[f]), inputs[f], outputs[f]};
+    PendingFrame frame{loadFrame(inputs[f], intrinsics), inputs[f], outputs[f]};
     if (f == 0) {
       width = frame.loaded.blob.width;
       height = frame.loaded.blob.height;

@@ -4,6 +4,7 @@
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -366,6 +367,103 @@ double
 millisecondsSince(std::chrono::steady_clock::time_point start)
 {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void
+addDepthImageOptions(po::options_description& options)
+{
+  const DepthIntrinsics d;
+  // clang-format off
+  options.add_options()
+    ("fx", po::value<double>()->default_value(d.fx), "depth PNG input: focal length along x, pixels")
+    ("fy", po::value<double>()->default_value(d.fy), "depth PNG input: focal length along y, pixels")
+    ("cx", po::value<double>()->default_value(d.cx), "depth PNG input: principal point column, pixels")
+    ("cy", po::value<double>()->default_value(d.cy), "depth PNG input: principal point row, pixels")
+    ("depth-scale", po::value<double>()->default_value(d.depth_scale),
+     "depth PNG values per metre: z = value / scale (TUM 5000, RealSense/Azure 1000)")
+    ("intrinsics", po::value<std::string>(),
+     "intrinsics.txt with fx, fy, cx, cy and the depth scale; options given explicitly override it [default: none]");
+  // clang-format on
+}
+
+DepthIntrinsics
+depthIntrinsicsFrom(const po::variables_map& vm)
+{
+  DepthIntrinsics intrinsics;
+  if (vm.count("intrinsics")) {
+    try {
+      intrinsics = readIntrinsics(vm["intrinsics"].as<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw InputError(e.what());
+    }
+  }
+  const std::pair<const char*, double*> fields[] = {{"fx", &intrinsics.fx},
+                                                    {"fy", &intrinsics.fy},
+                                                    {"cx", &intrinsics.cx},
+                                                    {"cy", &intrinsics.cy},
+                                                    {"depth-scale", &intrinsics.depth_scale}};
+  for (const auto& field : fields) {
+    if (!vm.count(field.first))
+      continue;
+    if (!vm[field.first].defaulted() || !vm.count("intrinsics"))
+      *field.second = vm[field.first].as<double>();
+  }
+  try {
+    intrinsics.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string(e.what()) + " (check --fx, --fy, --cx, --cy, --depth-scale and --intrinsics)");
+  }
+  return intrinsics;
+}
+
+bool
+isDepthImagePath(const std::string& path)
+{
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".png";
+}
+
+LoadedCloud
+loadFrame(const std::string& path, const DepthIntrinsics& intrinsics)
+{
+  if (!isDepthImagePath(path))
+    return loadCloud(path);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  try {
+    cloud = loadDepthPng(path, intrinsics);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+  if (cloud.height < 2)
+    throw InputError("'" + path + "': depth image has a single row; range_nlm needs a grid");
+  LoadedCloud loaded;
+  pcl::toPCLPointCloud2(cloud, loaded.blob);
+  return loaded;
+}
+
+std::vector<std::string>
+listInputFrames(const std::string& directory)
+{
+  try {
+    return listFrames(directory, ".pcd");
+  } catch (const InputError&) {
+    std::error_code ec;
+    if (!fs::is_directory(directory, ec))
+      throw;
+  }
+  try {
+    return listFrames(directory, ".png");
+  } catch (const InputError&) {
+    throw InputError("input directory '" + directory + "' holds no .pcd frame and no .png depth image");
+  }
+}
+
+std::string
+replaceExtension(const std::string& path, const std::string& extension)
+{
+  return fs::path(path).replace_extension(extension).string();
 }
 
 } // namespace tools

@@ -2,6 +2,7 @@
 // lists, checked loading and atomic saving of PCD files, filter options and progress display.
 #pragma once
 
+#include <range_nlm/depth_image.h>
 #include <range_nlm/parameters.h>
 
 #include <boost/program_options.hpp>
@@ -122,6 +123,34 @@ private:
 /// Milliseconds since `start`.
 double
 millisecondsSince(std::chrono::steady_clock::time_point start);
+
+/// Adds the options of 16-bit depth-PNG input: --fx, --fy, --cx, --cy (pixels), --depth-scale
+/// (stored values per metre) with the DepthIntrinsics defaults, and --intrinsics FILE.
+void
+addDepthImageOptions(boost::program_options::options_description& options);
+/// Intrinsics from those options: the defaults, overridden by --intrinsics FILE, overridden by
+/// every value given explicitly on the command line. Throws UsageError naming the option on an
+/// invalid value, InputError naming the file if the intrinsics file is unreadable or invalid.
+DepthIntrinsics
+depthIntrinsicsFrom(const boost::program_options::variables_map& vm);
+
+/// True if `path` ends in ".png" (any case): such inputs are read as 16-bit depth images.
+bool
+isDepthImagePath(const std::string& path);
+
+/// Loads one organized frame: a PCD file through loadCloud() (all fields), or a 16-bit depth PNG
+/// back-projected with `intrinsics` into a blob with fields x, y, z. Errors name the file.
+LoadedCloud
+loadFrame(const std::string& path, const DepthIntrinsics& intrinsics);
+
+/// The frames of an input directory, sorted by name: its *.pcd files if it has any, otherwise
+/// its *.png depth images. Throws InputError if the directory is missing or holds neither.
+std::vector<std::string>
+listInputFrames(const std::string& directory);
+
+/// `path` with its extension replaced by `extension` (e.g. ".png").
+std::string
+replaceExtension(const std::string& path, const std::string& extension);
 
 } // namespace tools
 } // namespace range_nlm

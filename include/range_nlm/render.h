@@ -71,8 +71,8 @@ enum class ScaleSource
 /// Parameters of all renderings. `validate()` is the single place where they are checked.
 struct RenderParameters
 {
-  /// Side of the grid neighbourhood of the plane fit that gives the shading normals (and the
-  /// local frames of the curvature fit), pixels. Odd, 3 ... 31, default 5.
+  /// Side of the grid neighbourhood of the plane fit that gives the shading normals
+  /// (estimateNormals()), pixels. Odd, 3 ... 31, default 5.
   int normal_window = 5;
   /// Side of the grid neighbourhood of the quadric fit that gives the mean curvature, pixels.
   /// Odd, 5 ... 31, default 7.
@@ -123,10 +123,10 @@ gridFromCloud(const pcl::PointCloud<pcl::PointXYZ>& cloud);
 std::vector<float>
 shadingIntensity(const Grid& grid, const RenderParameters& parameters);
 
-/// Per-point mean curvature H, 1 / cloud unit. A quadric h = a x^2 + b x y + c y^2 + d x + e y + f
-/// is fitted by least squares to the neighbours (curvature_window, depth-discontinuity test) in
-/// the local frame of the point (x, y along the tangent plane of the estimated normal n, h along
-/// n, toward the viewpoint), and
+/// Per-point mean curvature H, 1 / cloud unit. The neighbours of the point in its
+/// `curvature_window` that pass the depth-discontinuity test (`max_depth_step`) give a local frame
+/// (their least-squares plane: x, y along it, h along its normal n, oriented toward the viewpoint);
+/// a quadric h = a x^2 + b x y + c y^2 + d x + e y + f is fitted to them by least squares, and
 ///   H = -((1 + e^2) 2a - 2 d e b + (1 + d^2) 2c) / (2 (1 + d^2 + e^2)^(3/2)),
 /// the mean curvature of that graph at its origin with the sign convention H = div(n) / 2 for n
 /// facing the viewer. NaN for invalid points and where the fit is underdetermined (fewer than 10
@@ -160,6 +160,13 @@ curvatureColour(float curvature, float limit);
 /// parameters or an empty grid.
 RgbImage
 renderShaded(const Grid& grid, const RenderParameters& parameters);
+
+/// Colours precomputed curvature values (one per grid point, e.g. from meanCurvature()) on the
+/// scale [-limit, +limit]: background for invalid points, `no_estimate` where H is NaN. Throws
+/// std::invalid_argument if the sizes differ or limit <= 0.
+RgbImage
+curvatureToImage(const Grid& grid, const std::vector<float>& curvature, float limit,
+                 const RenderParameters& parameters);
 
 /// Curvature image of a grid on the scale [-limit, +limit] (limit in 1 / cloud unit, > 0).
 /// Throws std::invalid_argument on invalid parameters, an empty grid or limit <= 0.
