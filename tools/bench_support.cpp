@@ -1,0 +1,379 @@
+#include "bench_support.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include <sched.h>
+#include <sys/resource.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace range_nlm
+{
+namespace tools
+{
+namespace bench
+{
+
+namespace
+{
+
+void
+writeAll(int fd, const std::string& text)
+{
+  const char* p = text.data();
+  std::size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0) {
+      if (errno == EINTR)
+        continue;
+      return; // the parent is gone; nothing sensible is left to do
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+}
+
+std::string
+readAll(int fd)
+{
+  std::string text;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0) {
+      if (errno == EINTR)
+        continue;
+      break;
+    }
+    if (n == 0)
+      break;
+    text.append(buffer, static_cast<std::size_t>(n));
+  }
+  return text;
+}
+
+std::uint64_t
+statusField(const char* key)
+{
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  const std::size_t key_length = std::strlen(key);
+  while (std::getline(status, line))
+    if (line.compare(0, key_length, key) == 0 && line.size() > key_length && line[key_length] == ':') {
+      std::istringstream fields(line.substr(key_length + 1));
+      std::uint64_t kib = 0;
+      fields >> kib;
+      return kib * 1024u;
+    }
+  return 0;
+}
+
+} // namespace
+
+ChildResult
+runInChild(const std::function<std::vector<double>()>& work)
+{
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  int fds[2];
+  if (::pipe(fds) != 0)
+    throw std::runtime_error(std::string("cannot create a pipe for the measurement child: ") +
+                             std::strerror(errno));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int error = errno;
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw std::runtime_error(std::string("cannot fork the measurement child: ") + std::strerror(error));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::string payload;
+    int status = 0;
+    try {
+      const std::vector<double> values = work();
+      std::ostringstream out;
+      out << "ok\n" << std::setprecision(17);
+      for (double v : values)
+        out << v << "\n";
+      payload = out.str();
+    } catch (const std::exception& e) {
+      payload = std::string("error\n") + e.what();
+      status = 3;
+    } catch (...) {
+      payload = "error\nunknown exception";
+      status = 3;
+    }
+    writeAll(fds[1], payload);
+    ::close(fds[1]);
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    ::_exit(status); // no atexit handlers or static destructors of the parent's state
+  }
+
+  ::close(fds[1]);
+  const std::string payload = readAll(fds[0]);
+  ::close(fds[0]);
+  int status = 0;
+  struct rusage usage;
+  std::memset(&usage, 0, sizeof usage);
+  pid_t waited;
+  do
+    waited = ::wait4(pid, &status, 0, &usage);
+  while (waited < 0 && errno == EINTR);
+  if (waited < 0)
+    throw std::runtime_error(std::string("cannot wait for the measurement child: ") + std::strerror(errno));
+
+  ChildResult result;
+  result.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;
+  const std::size_t newline = payload.find('\n');
+  const std::string head = payload.substr(0, newline);
+  const std::string body = newline == std::string::npos ? std::string() : payload.substr(newline + 1);
+  if (WIFSIGNALED(status)) {
+    result.error =
+        "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+    return result;
+  }
+  if (head == "error") {
+    result.error = body.empty() ? "unknown error" : body;
+    return result;
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || head != "ok") {
+    result.error = "measurement child exited with status " +
+                   std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + " without a result";
+    return result;
+  }
+  std::istringstream numbers(body);
+  double v;
+  while (numbers >> v)
+    result.values.push_back(v);
+  result.ok = true;
+  return result;
+}
+
+std::uint64_t
+residentBytes()
+{
+  return statusField("VmRSS");
+}
+
+std::uint64_t
+peakResidentBytes()
+{
+  return statusField("VmHWM");
+}
+
+namespace
+{
+double
+processCpuMs()
+{
+  struct rusage usage;
+  if (::getrusage(RUSAGE_SELF, &usage) != 0)
+    return std::numeric_limits<double>::quiet_NaN();
+  const auto ms = [](const struct timeval& t) { return t.tv_sec * 1e3 + t.tv_usec * 1e-3; };
+  return ms(usage.ru_utime) + ms(usage.ru_stime);
+}
+} // namespace
+
+Timings
+timeRuns(const std::function<void()>& run, int runs, bool warmup)
+{
+  if (warmup)
+    run();
+  Timings t;
+  t.wall_ms.reserve(static_cast<std::size_t>(runs));
+  t.cpu_ms.reserve(static_cast<std::size_t>(runs));
+  for (int r = 0; r < runs; ++r) {
+    const double cpu = processCpuMs();
+    const auto start = std::chrono::steady_clock::now();
+    run();
+    t.wall_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    t.cpu_ms.push_back(processCpuMs() - cpu);
+  }
+  return t;
+}
+
+double
+median(std::vector<double> values)
+{
+  if (values.empty())
+    throw std::invalid_argument("median of an empty sample");
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+MachineInfo
+machineInfo()
+{
+  MachineInfo info;
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    const std::size_t colon = line.find(':');
+    if (colon == std::string::npos)
+      continue;
+    std::string key = line.substr(0, colon);
+    key.erase(key.find_last_not_of(" \t") + 1);
+    if (key == "model name" || (info.cpu_model.empty() && (key == "Hardware" || key == "cpu model"))) {
+      std::string value = line.substr(colon + 1);
+      value.erase(0, value.find_first_not_of(" \t"));
+      info.cpu_model = value;
+      if (key == "model name")
+        break;
+    }
+  }
+  if (info.cpu_model.empty())
+    info.cpu_model = "unknown (no model name in /proc/cpuinfo)";
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (::sched_getaffinity(0, sizeof set, &set) == 0)
+    info.usable_cpus = CPU_COUNT(&set);
+  const long online = ::sysconf(_SC_NPROCESSORS_ONLN);
+  info.online_cpus = online > 0 ? static_cast<int>(online) : 0;
+  if (info.usable_cpus == 0)
+    info.usable_cpus = info.online_cpus;
+  return info;
+}
+
+double
+loadAverage()
+{
+  std::ifstream file("/proc/loadavg");
+  double one_minute = -1.0;
+  if (!(file >> one_minute))
+    return -1.0;
+  return one_minute;
+}
+
+std::string
+jsonString(const std::string& text)
+{
+  std::string out = "\"";
+  for (const char c : text) {
+    switch (c) {
+    case '"': out += "\\\""; break;
+    case '\\': out += "\\\\"; break;
+    case '\n': out += "\\n"; break;
+    case '\t': out += "\\t"; break;
+    case '\r': out += "\\r"; break;
+    default:
+      if (static_cast<unsigned char>(c) < 0x20) {
+        char escaped[8];
+        std::snprintf(escaped, sizeof escaped, "\\u%04x",
+                      static_cast<unsigned>(static_cast<unsigned char>(c)));
+        out += escaped;
+      } else {
+        out += c;
+      }
+    }
+  }
+  return out + "\"";
+}
+
+std::string
+jsonNumber(double value)
+{
+  if (!std::isfinite(value))
+    return "null";
+  std::ostringstream out;
+  out << std::setprecision(10) << value;
+  return out.str();
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+cropCentre(const pcl::PointCloud<pcl::PointXYZ>& cloud, unsigned width, unsigned height,
+           const std::string& what)
+{
+  if (!cloud.isOrganized() || cloud.width < width || cloud.height < height)
+    throw std::invalid_argument(what + " is " + std::to_string(cloud.width) + " x " +
+                                std::to_string(cloud.height) + ", too small for its centre " +
+                                std::to_string(width) + " x " + std::to_string(height) + " crop");
+  const unsigned u0 = (cloud.width - width) / 2, v0 = (cloud.height - height) / 2;
+  pcl::PointCloud<pcl::PointXYZ> crop(width, height);
+  bool dense = true;
+  for (unsigned v = 0; v < height; ++v)
+    for (unsigned u = 0; u < width; ++u) {
+      const pcl::PointXYZ& p = cloud.at(u0 + u, v0 + v);
+      crop.at(u, v) = p;
+      dense = dense && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    }
+  crop.is_dense = dense;
+  crop.header = cloud.header;
+  crop.sensor_origin_ = cloud.sensor_origin_;
+  crop.sensor_orientation_ = cloud.sensor_orientation_;
+  return crop;
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+withFreshNoise(const pcl::PointCloud<pcl::PointXYZ>& cloud, std::uint64_t seed)
+{
+  pcl::PointCloud<pcl::PointXYZ> noisy = cloud;
+  std::mt19937_64 random(seed);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  const float ox = cloud.sensor_origin_[0], oy = cloud.sensor_origin_[1], oz = cloud.sensor_origin_[2];
+  for (pcl::PointXYZ& p : noisy.points) {
+    const float g = gauss(random); // drawn for every pixel: the noise field does not depend on holes
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      continue;
+    const float rx = p.x - ox, ry = p.y - oy, rz = p.z - oz;
+    const float range = std::sqrt(rx * rx + ry * ry + rz * rz);
+    if (!(range > 0.0f))
+      continue;
+    const float z = std::fabs(rz);
+    const float sigma = 0.0012f + 0.0019f * (z - 0.4f) * (z - 0.4f);
+    const float step = sigma * g / range;
+    p.x += step * rx;
+    p.y += step * ry;
+    p.z += step * rz;
+  }
+  return noisy;
+}
+
+double
+medianPixelSpacing(const pcl::PointCloud<pcl::PointXYZ>& cloud)
+{
+  std::vector<double> spacing;
+  for (unsigned v = 0; v < cloud.height; ++v)
+    for (unsigned u = 0; u + 1 < cloud.width; ++u) {
+      const pcl::PointXYZ& a = cloud.at(u, v);
+      const pcl::PointXYZ& b = cloud.at(u + 1, v);
+      if (!std::isfinite(a.z) || !std::isfinite(b.z))
+        continue;
+      const double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+      spacing.push_back(std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+  return spacing.empty() ? 0.0 : median(std::move(spacing));
+}
+
+double
+medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud)
+{
+  std::vector<double> z;
+  for (const pcl::PointXYZ& p : cloud.points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+      z.push_back(p.z);
+  return z.empty() ? 0.0 : median(std::move(z));
+}
+
+} // namespace bench
+} // namespace tools
+} // namespace range_nlm

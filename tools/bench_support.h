@@ -1,0 +1,112 @@
+// Helpers of range_nlm_bench: isolated measurement of one method in a forked child process,
+// statistics, machine description, JSON text, and the frame preparation (centre crop, fresh
+// depth-camera noise) the benchmark configurations need.
+#pragma once
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace range_nlm
+{
+namespace tools
+{
+namespace bench
+{
+
+/// Outcome of work run in a child process.
+struct ChildResult
+{
+  /// True if the work returned normally; otherwise `error` says why (exception text, exit
+  /// status or signal).
+  bool ok = false;
+  std::string error;
+  /// The numbers the work returned.
+  std::vector<double> values;
+  /// Peak resident set size of the child in bytes: ru_maxrss reported by wait4 (Linux reports
+  /// it in KiB). It includes what the child inherited from the parent at fork time.
+  std::uint64_t peak_rss_bytes = 0;
+};
+
+/// Forks, runs `work` in the child and returns its numbers and peak RSS. Each measured method
+/// gets its own address space, so one method's allocations never inflate another's peak, and a
+/// crash is reported instead of ending the benchmark. The parent must not have started an
+/// OpenMP thread pool (libgomp's pool does not survive fork); the children may.
+ChildResult
+runInChild(const std::function<std::vector<double>()>& work);
+
+/// Current (VmRSS) or peak (VmHWM) resident set size of this process in bytes, from
+/// /proc/self/status; 0 if unavailable.
+std::uint64_t
+residentBytes();
+std::uint64_t
+peakResidentBytes();
+
+/// Wall-clock and CPU milliseconds of each timed run.
+struct Timings
+{
+  std::vector<double> wall_ms;
+  /// CPU time of the whole process (user + system, all threads; getrusage) per run. On a shared
+  /// machine it varies less than wall time, but includes OpenMP's busy waiting.
+  std::vector<double> cpu_ms;
+};
+
+/// Times `run` once as a warm-up (if `warmup`) and then `runs` times.
+Timings
+timeRuns(const std::function<void()>& run, int runs, bool warmup);
+
+/// Median of a non-empty sample (mean of the two middle values for an even count).
+double
+median(std::vector<double> values);
+
+/// The machine: CPU model name from /proc/cpuinfo and the number of logical CPUs this process
+/// may run on (sched_getaffinity) and that the system has online.
+struct MachineInfo
+{
+  std::string cpu_model;
+  int usable_cpus = 0;
+  int online_cpus = 0;
+};
+MachineInfo
+machineInfo();
+
+/// The 1-minute load average from /proc/loadavg (negative if unavailable): on a shared machine
+/// it tells whether other work competed with the measurement.
+double
+loadAverage();
+
+/// `text` as a JSON string literal, quotes included.
+std::string
+jsonString(const std::string& text);
+/// A finite number as JSON (NaN and infinities become null).
+std::string
+jsonNumber(double value);
+
+/// The centre `width` x `height` window of an organized cloud (sensor pose kept). Throws
+/// std::invalid_argument naming `what` if the cloud is smaller than the window.
+pcl::PointCloud<pcl::PointXYZ>
+cropCentre(const pcl::PointCloud<pcl::PointXYZ>& cloud, unsigned width, unsigned height,
+           const std::string& what);
+
+/// A copy of `cloud` with fresh depth-camera noise added along each camera ray (from the
+/// sensor origin): Gaussian with sigma(z) = 1.2 mm + 1.9 mm * (z - 0.4 m)^2, z in metres (the
+/// Kinect axial model of METHOD.md). NaN points stay NaN. Deterministic for a given seed.
+pcl::PointCloud<pcl::PointXYZ>
+withFreshNoise(const pcl::PointCloud<pcl::PointXYZ>& cloud, std::uint64_t seed);
+
+/// Median distance between horizontally adjacent valid points: the pixel spacing of the
+/// frame at its typical depth, in cloud units. 0 if no adjacent valid pair exists.
+double
+medianPixelSpacing(const pcl::PointCloud<pcl::PointXYZ>& cloud);
+
+/// Median z of the valid points (0 if there is none).
+double
+medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud);
+
+} // namespace bench
+} // namespace tools
+} // namespace range_nlm
