@@ -3,10 +3,11 @@
 // candidate frame):
 //   Sim(i, i + delta) = n_i^T [ sum_{o in O} D(i+o) D(i+o)^T ] n_i / (valid pairs),
 // so the six distinct entries of D D^T and the pair count are box-filtered over the patch once
-// per shift for all pixels. Horizontal sums are direct float sums of P values (no drift);
+// per shift for all pixels. Horizontal sums are fresh float sums of P values (no drift);
 // vertical sums are running sums in double. Rows are processed in fixed tiles, so the output
-// does not depend on the number of threads.
-#include "kernel_math.h"
+// does not depend on the number of threads. Cost per point ~ S^2 (independent of P, up to the
+// P adds of the horizontal sums).
+#include "kernel_rows.h"
 
 #include <range_nlm/kernel.h>
 
@@ -22,7 +23,6 @@ namespace
 {
 
 constexpr int kTileRows = 32;
-constexpr int kChannels = 7; // xx, xy, xz, yy, yz, zz, count
 
 /// A frame copied into a zero-padded SoA grid; invalid and border points have flag 0 and
 /// coordinates 0, so the inner loops need no bounds checks and never see NaN.
@@ -55,105 +55,21 @@ struct PaddedFrame
   {
     return static_cast<std::size_t>(v + border) * stride + (u + border);
   }
+  RowPointers row(int u, int v) const
+  {
+    const std::size_t k = index(u, v);
+    return RowPointers{&x[k], &y[k], &z[k], &f[k]};
+  }
 };
 
 struct Workspace
 {
   std::vector<float> prod;  // kChannels x (width + P - 1): per-pixel products of one D row
-  std::vector<float> ring;  // P x kChannels x width: horizontally summed rows
+  std::vector<float> ring;  // (P + 1) x kChannels x width: horizontally summed rows
   std::vector<double> vacc; // kChannels x width: vertical running sums
+  std::vector<float> vrow;  // the same as float, for the weight pass
   std::vector<float> num, den;
 };
-
-/// Products of one D row (candidate row shifted by (dx, dy)) and their horizontal box sums.
-__attribute__((target_clones("avx2", "default"))) void
-rowProducts(const PaddedFrame& c, const PaddedFrame& k, int width, int row, int dx, int dy,
-            int patch, float* prod, float* out)
-{
-  const int hp = patch / 2;
-  const int plen = width + patch - 1;
-  const std::size_t a0 = c.index(-hp, row);
-  const std::size_t b0 = k.index(-hp + dx, row + dy);
-  const float* cx = &c.x[a0];
-  const float* cy = &c.y[a0];
-  const float* cz = &c.z[a0];
-  const float* cf = &c.f[a0];
-  const float* kx = &k.x[b0];
-  const float* ky = &k.y[b0];
-  const float* kz = &k.z[b0];
-  const float* kf = &k.f[b0];
-  float* p0 = prod;
-  float* p1 = prod + plen;
-  float* p2 = prod + 2 * plen;
-  float* p3 = prod + 3 * plen;
-  float* p4 = prod + 4 * plen;
-  float* p5 = prod + 5 * plen;
-  float* p6 = prod + 6 * plen;
-  for (int t = 0; t < plen; ++t) {
-    const float m = cf[t] * kf[t];
-    const float ex = (cx[t] - kx[t]) * m;
-    const float ey = (cy[t] - ky[t]) * m;
-    const float ez = (cz[t] - kz[t]) * m;
-    p0[t] = ex * ex;
-    p1[t] = ex * ey;
-    p2[t] = ex * ez;
-    p3[t] = ey * ey;
-    p4[t] = ey * ez;
-    p5[t] = ez * ez;
-    p6[t] = m;
-  }
-  for (int ch = 0; ch < kChannels; ++ch) {
-    const float* p = prod + ch * plen;
-    float* o = out + ch * width;
-    for (int u = 0; u < width; ++u) {
-      float s = 0.0f;
-      for (int t = 0; t < patch; ++t)
-        s += p[u + t];
-      o[u] = s;
-    }
-  }
-}
-
-/// Weights of one output row for one shift, accumulated into num/den.
-__attribute__((target_clones("avx2", "default"))) void
-rowWeights(const PaddedFrame& c, const PaddedFrame& k, const float* active, const float* nx,
-           const float* ny, const float* nz, const double* vacc, int width, int row, int dx,
-           int dy, float inv_d2, float inv_s2, float psi, float* num, float* den)
-{
-  const std::size_t a0 = c.index(0, row);
-  const std::size_t b0 = k.index(dx, row + dy);
-  const float* cx = &c.x[a0];
-  const float* cy = &c.y[a0];
-  const float* cz = &c.z[a0];
-  const float* kx = &k.x[b0];
-  const float* ky = &k.y[b0];
-  const float* kz = &k.z[b0];
-  const float* kf = &k.f[b0];
-  const double* mxx = vacc;
-  const double* mxy = vacc + width;
-  const double* mxz = vacc + 2 * width;
-  const double* myy = vacc + 3 * width;
-  const double* myz = vacc + 4 * width;
-  const double* mzz = vacc + 5 * width;
-  const double* cnt = vacc + 6 * width;
-  for (int u = 0; u < width; ++u) {
-    const float a = nx[u], b = ny[u], g = nz[u];
-    const float quad = a * a * float(mxx[u]) + b * b * float(myy[u]) + g * g * float(mzz[u]) +
-                       2.0f * (a * b * float(mxy[u]) + a * g * float(mxz[u]) + b * g * float(myz[u]));
-    const float pairs = float(cnt[u]);
-    const float use = (pairs > 0.5f ? 1.0f : 0.0f) * active[u] * kf[u];
-    const float sim = std::max(quad, 0.0f) / std::max(pairs, 1.0f);
-    const float ex = cx[u] - kx[u];
-    const float ey = cy[u] - ky[u];
-    const float ez = cz[u] - kz[u];
-    const float dist2 = ex * ex + ey * ey + ez * ez;
-    const float h = ex * a + ey * b + ez * g;
-    const float arg = -(dist2 * inv_d2 + sim * inv_s2);
-    const float w = use * psi * expNonPositiveInline(arg);
-    num[u] += w * h;
-    den[u] += w;
-  }
-}
 
 } // namespace
 
@@ -163,6 +79,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
                    int threads, const std::vector<unsigned char>& active,
                    std::vector<float>& offsets)
 {
+  const RowKernels& kernels = rowKernels();
   const int width = center.width;
   const int height = center.height;
   const int r = search_window / 2;
@@ -197,13 +114,15 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
 
   const int tiles = (height + kTileRows - 1) / kTileRows;
   const int plen = width + patch_size - 1;
+  const std::size_t row_floats = static_cast<std::size_t>(kChannels) * width;
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
     Workspace ws;
     ws.prod.resize(static_cast<std::size_t>(kChannels) * plen);
-    ws.ring.resize(static_cast<std::size_t>(patch_size) * kChannels * width);
-    ws.vacc.resize(static_cast<std::size_t>(kChannels) * width);
+    ws.ring.resize(static_cast<std::size_t>(patch_size + 1) * row_floats);
+    ws.vacc.resize(row_floats);
+    ws.vrow.resize(row_floats);
     ws.num.resize(static_cast<std::size_t>(kTileRows) * width);
     ws.den.resize(static_cast<std::size_t>(kTileRows) * width);
 #pragma omp for schedule(dynamic, 1)
@@ -214,31 +133,32 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
       std::fill(ws.den.begin(), ws.den.end(), 0.0f);
       for (std::size_t f = 0; f < frames.size(); ++f) {
         const PaddedFrame& cand = *frame_ptr[f];
-        const float inv_d2 = inverseSquareInline(frames[f].distance_bandwidth);
-        const float inv_s2 = inverseSquareInline(frames[f].similarity_bandwidth);
+        const float inv_d2 = inverseSquare(frames[f].distance_bandwidth);
+        const float inv_s2 = inverseSquare(frames[f].similarity_bandwidth);
         const float psi = frames[f].weight;
         for (int dy = -r; dy <= r; ++dy) {
           for (int dx = -r; dx <= r; ++dx) {
             std::fill(ws.vacc.begin(), ws.vacc.end(), 0.0);
-            // D rows y0 - hp .. y1 - 1 + hp feed the output rows y0 .. y1 - 1.
+            // D rows y0 - hp .. y1 - 1 + hp feed the output rows y0 .. y1 - 1. The ring has
+            // P + 1 slots, so row yy - P (leaving the vertical window now) is still held.
             for (int yy = y0 - hp; yy < y1 + hp; ++yy) {
-              float* slot = &ws.ring[static_cast<std::size_t>((yy - (y0 - hp)) % patch_size) *
-                                     kChannels * width];
-              if (yy - (y0 - hp) >= patch_size) {
-                for (std::size_t q = 0; q < static_cast<std::size_t>(kChannels) * width; ++q)
-                  ws.vacc[q] -= slot[q];
-              }
-              rowProducts(padded_center, cand, width, yy, dx, dy, patch_size, ws.prod.data(), slot);
-              for (std::size_t q = 0; q < static_cast<std::size_t>(kChannels) * width; ++q)
-                ws.vacc[q] += slot[q];
+              const int k = yy - (y0 - hp);
+              float* slot = &ws.ring[static_cast<std::size_t>(k % (patch_size + 1)) * row_floats];
+              const float* leaving =
+                  k >= patch_size
+                      ? &ws.ring[static_cast<std::size_t>((k - patch_size) % (patch_size + 1)) * row_floats]
+                      : nullptr;
+              kernels.products(padded_center.row(-hp, yy), cand.row(-hp + dx, yy + dy), width, patch_size,
+                               ws.prod.data(), slot);
               const int out_row = yy - hp;
-              if (out_row >= y0) {
-                const std::size_t base = static_cast<std::size_t>(out_row) * width;
-                rowWeights(padded_center, cand, &act[base], &nx[base], &ny[base], &nz[base],
-                           ws.vacc.data(), width, out_row, dx, dy, inv_d2, inv_s2, psi,
-                           &ws.num[static_cast<std::size_t>(out_row - y0) * width],
-                           &ws.den[static_cast<std::size_t>(out_row - y0) * width]);
-              }
+              kernels.slide(ws.vacc.data(), slot, leaving, out_row >= y0 ? ws.vrow.data() : nullptr, row_floats);
+              if (out_row < y0)
+                continue;
+              const std::size_t base = static_cast<std::size_t>(out_row) * width;
+              const std::size_t local = static_cast<std::size_t>(out_row - y0) * width;
+              kernels.weights(padded_center.row(0, out_row), cand.row(dx, out_row + dy), &act[base], &nx[base],
+                              &ny[base], &nz[base], ws.vrow.data(), width, inv_d2, inv_s2, psi, &ws.num[local],
+                              &ws.den[local]);
             }
           }
         }

@@ -15,9 +15,10 @@ inline float
 expNonPositiveInline(float x)
 {
   x = x < -87.0f ? -87.0f : x;
-  const float fx = x * 1.44269504088896341f;
-  // round to nearest without a library call
-  const float n = static_cast<float>(static_cast<int>(fx - 0.5f));
+  // Round x / ln 2 to the nearest integer n with the 1.5 * 2^23 trick (no float -> int
+  // conversion, which keeps the loop vectorizable); t's low mantissa bits hold n.
+  const float t = x * 1.44269504088896341f + 12582912.0f;
+  const float n = t - 12582912.0f;
   float r = x - n * 0.693359375f;
   r = r + n * 2.12194440e-4f;
   float p = 1.9875691500e-4f;
@@ -27,9 +28,8 @@ expNonPositiveInline(float x)
   p = p * r + 1.6666665459e-1f;
   p = p * r + 5.0000001201e-1f;
   p = p * r * r + r + 1.0f;
-  const std::int32_t e = (static_cast<std::int32_t>(n) + 127) << 23;
-  float scale;
-  std::memcpy(&scale, &e, sizeof(scale));
+  const int e = ((__builtin_bit_cast(int, t) - 0x4B400000) + 127) << 23;
+  const float scale = __builtin_bit_cast(float, e);
   const float result = p * scale;
   return x <= -87.0f ? 0.0f : result;
 }

@@ -1,0 +1,48 @@
+// Row kernels of the box-filtered evaluation (internal). They work on raw pointers only, so the
+// same source (kernel_rows.inc) is compiled once for the baseline ISA and once for AVX2+FMA and
+// chosen at run time; no inline function with external linkage is shared between the two.
+#pragma once
+
+#include <cstddef>
+
+namespace range_nlm
+{
+namespace detail
+{
+
+/// Channels box-filtered per shift: D D^T entries xx, xy, xz, yy, yz, zz and the pair count.
+constexpr int kChannels = 7;
+
+/// One row of a padded SoA frame: pointers to x, y, z and the validity flag (1/0).
+struct RowPointers
+{
+  const float* x;
+  const float* y;
+  const float* z;
+  const float* f;
+};
+
+struct RowKernels
+{
+  /// Products D D^T (and the pair flag) for `width + patch - 1` pixels of centre row c and
+  /// candidate row k (both already offset to the first pixel), then their horizontal box sums
+  /// over `patch` pixels into out[ch * width + u].
+  void (*products)(RowPointers c, RowPointers k, int width, int patch, float* prod, float* out);
+  /// acc += add - sub (sub may be null), then copy = float(acc) if copy is not null.
+  void (*slide)(double* acc, const float* add, const float* sub, float* copy, std::size_t n);
+  /// Weights of one output row for one shift, accumulated into num / den:
+  /// w = psi * exp(-(|p_i - p_j|^2 inv_d2 + Sim inv_s2)), Sim = n^T M n / pairs.
+  void (*weights)(RowPointers c, RowPointers k, const float* active, const float* nx, const float* ny,
+                  const float* nz, const float* m, int width, float inv_d2, float inv_s2, float psi,
+                  float* num, float* den);
+};
+
+/// The fastest kernels this CPU supports.
+const RowKernels&
+rowKernels();
+/// The baseline kernels (for tests).
+const RowKernels&
+baselineRowKernels();
+
+} // namespace detail
+} // namespace range_nlm
