@@ -243,7 +243,7 @@ public:
     const double oa = o.dot(axis_), da = direction.dot(axis_);
     const Vec3 op = o - oa * axis_, dp = direction - da * axis_;
     double best = std::numeric_limits<double>::infinity();
-    Vec3 best_normal;
+    Vec3 best_normal = Vec3::Zero();
     // Side: |op + t dp|^2 = r^2 with |oa + t da| <= half height.
     const double a = dp.squaredNorm();
     if (a > 1e-300) {
@@ -322,7 +322,7 @@ public:
     const Vec3 o = r_.transpose() * (origin - center_);
     const Vec3 d = r_.transpose() * direction;
     double best = std::numeric_limits<double>::infinity();
-    Vec3 best_normal;
+    Vec3 best_normal = Vec3::Zero();
 
     // Base box, centred at w = -D/2.
     {
@@ -687,7 +687,7 @@ renderFrame(const SceneOptions& options, int frame)
       depth[i] = t;
     }
   }
-  out.truth.is_dense = false;
+  out.truth.is_dense = std::find(out.shape_index.begin(), out.shape_index.end(), -1) == out.shape_index.end();
 
   // Noise: one random stream per frame, three draws per pixel in scan order whether or not the
   // pixel is hit, so changing dropouts or the scene never reshuffles the noise of other pixels.
