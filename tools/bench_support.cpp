@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iomanip>
@@ -159,10 +160,18 @@ runInChild(const std::function<std::vector<double>()>& work)
                    std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + " without a result";
     return result;
   }
+  // Token by token with strtod: operator>> does not read back the "nan" it writes.
   std::istringstream numbers(body);
-  double v;
-  while (numbers >> v)
+  std::string token;
+  while (numbers >> token) {
+    char* end = nullptr;
+    const double v = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0') {
+      result.error = "measurement child returned a malformed number '" + token + "'";
+      return result;
+    }
     result.values.push_back(v);
+  }
   result.ok = true;
   return result;
 }

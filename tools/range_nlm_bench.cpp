@@ -432,77 +432,85 @@ benchBreakdown(const Settings& s, const Frames& frames, int search, int patch, b
   for (const std::string& name : names)
     b.phases.push_back(Phase{name});
 
-  progress(s, "breakdown [" + frames.label + "], warm-up + " + std::to_string(s.runs) + " run(s) per phase");
+  progress(s, "breakdown [" + frames.label + "], warm-up + " + std::to_string(s.runs) +
+                  " round(s) of all phases");
   b.result = bench::runInChild([&] {
     const std::size_t count = frames.clouds.size(), c = frames.center;
-    const Cloud& current = *frames.clouds[c];
-    const Viewpoint viewpoint = viewpointOf(current);
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    auto timed = [&](const std::function<void()>& f) {
-      return bench::median(bench::timeRuns(f, s.runs, true).wall_ms);
-    };
-    std::vector<double> ms;
-
+    const Viewpoint viewpoint = viewpointOf(*frames.clouds[c]);
+    const bool presmooth = p.normal_presmooth_window > 1;
+    const std::vector<unsigned char> all_active;
     std::vector<Grid> grids(count);
-    ms.push_back(timed([&] {
+    std::vector<NormalField> raw(count);
+    std::vector<Bandwidths> bandwidths(count);
+    std::vector<FrameTerm> terms;
+    NormalField normals;
+    Grid smooth, moved;
+    std::vector<float> offsets, direct;
+
+    // The steps in pipeline order (each uses the results of the earlier ones); an empty step
+    // is skipped. Every round runs all of them, so a change of machine load hits every phase
+    // alike instead of whichever phase happened to be timed at the time.
+    std::vector<std::function<void()>> steps(b.phases.size());
+    steps[0] = [&] {
       for (std::size_t k = 0; k < count; ++k)
         grids[k] = gridOf(*frames.clouds[k]);
-    }));
-    std::vector<NormalField> raw(count);
-    ms.push_back(timed([&] {
+    };
+    steps[1] = [&] {
       for (std::size_t k = 0; k < count; ++k)
         raw[k] = estimateNormals(grids[k], p.normal_window, viewpoint, p.threads);
-    }));
-    std::vector<Bandwidths> bandwidths(count);
-    ms.push_back(timed([&] {
+      if (!presmooth)
+        normals = raw[c];
+    };
+    steps[2] = [&] {
       for (std::size_t k = 0; k < count; ++k) {
         const auto offset = static_cast<std::uint64_t>(static_cast<long long>(k) - static_cast<long long>(c));
         bandwidths[k] = scaled(estimateBandwidths(grids[k], raw[k], p.search_window, p.bandwidth_samples,
                                                   p.seed + offset * 7919u),
                                p);
       }
-    }));
-    NormalField normals = raw[c];
-    if (p.normal_presmooth_window > 1) {
-      Grid smooth;
-      ms.push_back(timed([&] {
+      float s_max = 0.0f;
+      for (const Bandwidths& bw : bandwidths)
+        s_max = std::max(s_max, bw.similarity);
+      terms.clear();
+      for (std::size_t k = 0; k < count; ++k)
+        terms.push_back(FrameTerm{&grids[k], bandwidths[k].distance, bandwidths[k].similarity,
+                                  temporalDistanceWeight(static_cast<int>(k), static_cast<int>(c)) *
+                                      temporalNoiseWeight(bandwidths[k].similarity, s_max)});
+    };
+    if (presmooth) {
+      steps[3] = [&] {
         smooth = presmoothAlongRays(grids[c], p.normal_presmooth_window,
                                     p.normal_presmooth_range * bandwidths[c].sigma_s, viewpoint, p.threads);
-      }));
-      ms.push_back(timed([&] { normals = estimateNormals(smooth, p.normal_window, viewpoint, p.threads); }));
-    } else {
-      ms.push_back(nan);
-      ms.push_back(nan);
+      };
+      steps[4] = [&] { normals = estimateNormals(smooth, p.normal_window, viewpoint, p.threads); };
     }
-    float s_max = 0.0f;
-    for (const Bandwidths& bw : bandwidths)
-      s_max = std::max(s_max, bw.similarity);
-    std::vector<FrameTerm> terms;
-    for (std::size_t k = 0; k < count; ++k)
-      terms.push_back(FrameTerm{&grids[k], bandwidths[k].distance, bandwidths[k].similarity,
-                                temporalDistanceWeight(static_cast<int>(k), static_cast<int>(c)) *
-                                    temporalNoiseWeight(bandwidths[k].similarity, s_max)});
-    const std::vector<unsigned char> all_active;
-    std::vector<float> offsets;
-    ms.push_back(timed([&] {
+    steps[5] = [&] {
       computeOffsets(grids[c], normals, terms, search, patch, Evaluation::fast, p.threads, all_active,
                      offsets);
-    }));
-    Grid moved = grids[c];
-    ms.push_back(timed([&] { applyOffsets(moved, normals, offsets, p.displacement, viewpoint); }));
-    if (with_direct) {
-      std::vector<float> direct;
-      ms.push_back(timed([&] {
+      moved = grids[c]; // the copy applyOffsets moves, outside its timing
+    };
+    steps[6] = [&] { applyOffsets(moved, normals, offsets, p.displacement, viewpoint); };
+    if (with_direct)
+      steps[7] = [&] {
         computeOffsets(grids[c], normals, terms, search, patch, Evaluation::direct, p.threads, all_active,
                        direct);
-      }));
-    } else {
-      ms.push_back(nan);
-    }
-    const std::function<void()> filter = temporal
-                                             ? prepareTemporal(frames, Evaluation::fast, p.threads)()
-                                             : prepareStatic(frames.clouds[c], Evaluation::fast, p.threads)();
-    ms.push_back(timed(filter));
+      };
+    steps[8] = temporal ? prepareTemporal(frames, Evaluation::fast, p.threads)()
+                        : prepareStatic(frames.clouds[c], Evaluation::fast, p.threads)();
+
+    std::vector<std::vector<double>> samples(steps.size());
+    for (int round = -1; round < s.runs; ++round) // round -1 is the warm-up
+      for (std::size_t i = 0; i < steps.size(); ++i) {
+        if (!steps[i])
+          continue;
+        const auto start = std::chrono::steady_clock::now();
+        steps[i]();
+        if (round >= 0)
+          samples[i].push_back(millisecondsSince(start));
+      }
+    std::vector<double> ms;
+    for (const std::vector<double>& sample : samples)
+      ms.push_back(sample.empty() ? std::numeric_limits<double>::quiet_NaN() : bench::median(sample));
     return ms;
   });
   if (b.result.ok)
@@ -773,8 +781,8 @@ printTable(const Settings& s, const RunInfo& info, const std::vector<std::string
     out << "  [" << i + 1 << "] " << notes[i] << "\n";
 
   for (const Breakdown& b : breakdowns) {
-    out << "\nbreakdown [" << b.config << "], " << s.threads << " thread(s), median of " << s.runs
-        << " run(s) per phase:\n";
+    out << "\nbreakdown [" << b.config << "], " << s.threads << " thread(s), median per phase over " << s.runs
+        << " round(s) of all phases in pipeline order, after a warm-up round:\n";
     if (!b.result.ok) {
       out << "  FAILED: " << b.result.error << "\n";
       continue;
