@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -105,6 +106,7 @@ struct Settings
   double mls_radius = 0.0;
   std::uint64_t seed = 1;
   bool json = false;
+  std::string json_file;
   bool quiet = false;
 };
 
@@ -844,13 +846,12 @@ printTable(const Settings& s, const RunInfo& info, const std::vector<std::string
 }
 
 void
-printJson(const Settings& s, const RunInfo& info, const std::vector<std::string>& sources, double baseline_mb,
-          const std::vector<Row>& rows, const std::vector<Breakdown>& breakdowns,
+printJson(std::ostream& out, const Settings& s, const RunInfo& info, const std::vector<std::string>& sources,
+          double baseline_mb, const std::vector<Row>& rows, const std::vector<Breakdown>& breakdowns,
           const SequenceMemory* sequence, const std::vector<Target>& targets)
 {
   using bench::jsonNumber;
   using bench::jsonString;
-  std::ostream& out = std::cout;
   out << "{\"tool\": \"range_nlm_bench\", \"machine\": {\"cpu_model\": " << jsonString(info.machine.cpu_model)
       << ", \"usable_cpus\": " << info.machine.usable_cpus
       << ", \"online_cpus\": " << info.machine.online_cpus
@@ -963,6 +964,7 @@ run(int argc, char** argv)
      "MovingLeastSquares search radius in cloud units; 0 = the radius of a disc with the 7x7 window's area at the frame's median pixel spacing")
     ("seed", po::value<std::uint64_t>()->default_value(1), "seed of the fresh noise of generated frames")
     ("json", "print one JSON object instead of the table")
+    ("json-file", po::value<std::string>(), "also write that JSON object to this file")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on
   po::positional_options_description positional;
@@ -985,6 +987,12 @@ run(int argc, char** argv)
   s.mls_radius = vm["mls-radius"].as<double>();
   s.seed = vm["seed"].as<std::uint64_t>();
   s.json = vm.count("json") > 0;
+  if (vm.count("json-file")) {
+    s.json_file = vm["json-file"].as<std::string>();
+    // Fail now rather than after a long run.
+    if (!std::ofstream(s.json_file, std::ios::app))
+      throw UsageError("--json-file '" + s.json_file + "': cannot open the file for writing");
+  }
   s.quiet = vm.count("quiet") > 0;
   if (s.config != "all" && s.config != "static" && s.config != "temporal")
     throw UsageError("--config '" + s.config + "' is invalid: expected all, static or temporal");
@@ -1061,8 +1069,14 @@ run(int argc, char** argv)
   const std::vector<Target> targets = evaluateTargets(rows, sequence.get());
   info.load_end = bench::loadAverage();
   info.wall_s = millisecondsSince(start) / 1e3;
+  if (!s.json_file.empty()) {
+    std::ofstream file(s.json_file);
+    printJson(file, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
+    if (!file)
+      throw InputError("--json-file '" + s.json_file + "': cannot write the file");
+  }
   if (s.json)
-    printJson(s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
+    printJson(std::cout, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
   else
     printTable(s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
 
