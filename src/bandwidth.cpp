@@ -56,3 +56,123 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
 }
 
 } // namespace range_nlm
+
+#include <pcl/common/eigen.h>
+
+namespace range_nlm
+{
+namespace
+{
+float
+interpolate(const std::vector<float>& xs, const std::vector<float>& ys, float x)
+{
+  if (xs.empty())
+    return 0.0f;
+  if (x <= xs.front())
+    return ys.front();
+  if (x >= xs.back())
+    return ys.back();
+  const auto it = std::upper_bound(xs.begin(), xs.end(), x);
+  const std::size_t hi = static_cast<std::size_t>(it - xs.begin()), lo = hi - 1;
+  const float t = (x - xs[lo]) / std::max(xs[hi] - xs[lo], 1e-30f);
+  return ys[lo] + t * (ys[hi] - ys[lo]);
+}
+
+float
+medianOf(std::vector<float> v)
+{
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  return v[mid];
+}
+} // namespace
+
+float
+NoiseProfile::sigmaAt(float rho) const
+{
+  return interpolate(range, sigma, rho);
+}
+
+float
+NoiseProfile::extentAt(float rho) const
+{
+  return interpolate(range, extent, rho);
+}
+
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint)
+{
+  std::vector<int> candidates;
+  candidates.reserve(grid.size());
+  for (std::size_t i = 0; i < grid.size(); ++i)
+    if (grid.valid[i])
+      candidates.push_back(static_cast<int>(i));
+  if (candidates.empty())
+    throw std::invalid_argument("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
+  std::mt19937_64 rng(seed);
+  const int r = search_window / 2;
+  struct Sample
+  {
+    float rho, sigma, extent;
+  };
+  std::vector<Sample> found;
+  found.reserve(samples);
+  for (int s = 0; s < samples; ++s) {
+    const int k = candidates[rng() % candidates.size()];
+    const int u = k % grid.width, v = k / grid.width;
+    double sum[3] = {0, 0, 0}, sq[6] = {0, 0, 0, 0, 0, 0}, max_dist2 = 0.0;
+    int count = 0;
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        const int j = jv * grid.width + ju;
+        if (!grid.valid[j])
+          continue;
+        const double qx = double(grid.x[j]) - grid.x[k], qy = double(grid.y[j]) - grid.y[k],
+                     qz = double(grid.z[j]) - grid.z[k];
+        sum[0] += qx, sum[1] += qy, sum[2] += qz;
+        sq[0] += qx * qx, sq[1] += qx * qy, sq[2] += qx * qz, sq[3] += qy * qy, sq[4] += qy * qz, sq[5] += qz * qz;
+        max_dist2 = std::max(max_dist2, qx * qx + qy * qy + qz * qz);
+        ++count;
+      }
+    if (count < 4)
+      continue;
+    const double inv = 1.0 / count;
+    const double mx = sum[0] * inv, my = sum[1] * inv, mz = sum[2] * inv;
+    Eigen::Matrix3d cov;
+    cov << sq[0] * inv - mx * mx, sq[1] * inv - mx * my, sq[2] * inv - mx * mz, sq[1] * inv - mx * my,
+        sq[3] * inv - my * my, sq[4] * inv - my * mz, sq[2] * inv - mx * mz, sq[4] * inv - my * mz,
+        sq[5] * inv - mz * mz;
+    double smallest = 0.0;
+    Eigen::Vector3d normal;
+    pcl::eigen33(cov, smallest, normal);
+    const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
+    const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(rho > 0.0))
+      continue;
+    found.push_back(Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)});
+  }
+  if (found.empty())
+    throw std::invalid_argument("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
+  std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
+  const std::size_t bins = std::clamp<std::size_t>(found.size() / 64, 1, 8);
+  NoiseProfile profile;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t lo = b * found.size() / bins, hi = (b + 1) * found.size() / bins;
+    std::vector<float> rho, sigma, extent;
+    for (std::size_t i = lo; i < hi; ++i) {
+      rho.push_back(found[i].rho);
+      sigma.push_back(found[i].sigma);
+      extent.push_back(found[i].extent);
+    }
+    profile.range.push_back(medianOf(rho));
+    profile.sigma.push_back(medianOf(sigma));
+    profile.extent.push_back(medianOf(extent));
+  }
+  // Equal ranges (e.g. a fronto-parallel plane) would make interpolation degenerate.
+  for (std::size_t b = 1; b < profile.range.size(); ++b)
+    profile.range[b] = std::max(profile.range[b], std::nextafter(profile.range[b - 1], 1e30f));
+  return profile;
+}
+
+} // namespace range_nlm

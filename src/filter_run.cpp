@@ -33,6 +33,18 @@ inverseSquare(float bandwidth)
 {
   return inverseSquareInline(bandwidth);
 }
+
+int
+resolveThreads(int threads)
+{
+  if (threads > 0)
+    return threads;
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
 } // namespace detail
 
 void
@@ -46,6 +58,7 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
   if (!active.empty() && active.size() != center.size())
     throw std::invalid_argument("range_nlm: the active mask must have one entry per point");
   offsets.assign(center.size(), 0.0f);
+  threads = detail::resolveThreads(threads);
   if (evaluation == Evaluation::direct)
     detail::computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
   else
@@ -54,10 +67,13 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
 
 void
 applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
-             Displacement displacement, const Viewpoint& viewpoint)
+             Displacement displacement, const Viewpoint& viewpoint, const std::vector<float>& limit,
+             float min_cos)
 {
   for (std::size_t i = 0; i < grid.size(); ++i) {
-    const float h = offsets[i];
+    float h = offsets[i];
+    if (!limit.empty())
+      h = std::clamp(h, -limit[i], limit[i]);
     if (!grid.valid[i] || h == 0.0f || !std::isfinite(h))
       continue;
     const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
@@ -73,11 +89,17 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
     if (!(len > 0.0f))
       continue;
     vx /= len, vy /= len, vz /= len;
-    float c = vx * nx + vy * ny + vz * nz;
-    const float min_cos = 0.25f; // at grazing angles the ray step is limited to 4 h
-    if (std::fabs(c) < min_cos)
-      c = c < 0.0f ? -min_cos : min_cos;
-    const float t = -h / c;
+    const float c = vx * nx + vy * ny + vz * nz;
+    if (std::fabs(c) < min_cos || !(std::fabs(c) > 0.0f)) {
+      // grazing: the ray step would amplify normal errors; follow the normal
+      grid.x[i] -= h * nx;
+      grid.y[i] -= h * ny;
+      grid.z[i] -= h * nz;
+      continue;
+    }
+    float t = -h / c;
+    if (!limit.empty())
+      t = std::clamp(t, -limit[i], limit[i]);
     grid.x[i] += t * vx;
     grid.y[i] += t * vy;
     grid.z[i] += t * vz;
@@ -134,49 +156,100 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     throw std::invalid_argument("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
 
   // OpenMP treats num_threads(0) as an error; map 0 to the runtime's default.
-  int threads = parameters.threads;
-  if (threads == 0) {
-#ifdef _OPENMP
-    threads = omp_get_max_threads();
-#else
-    threads = 1;
-#endif
-  }
+  const int threads = detail::resolveThreads(parameters.threads);
 
   FilterRun run;
   run.output = input;
   const int count = static_cast<int>(frames.size());
 
-  // Bandwidths of the neighbour frames are estimated once, from their own data.
+  const bool adaptive = parameters.bandwidth_model == BandwidthModel::range_adaptive;
+  const std::size_t n = input.size();
+
+  // Range of every centre point (the per-point bandwidths are functions of it).
+  auto rangesOf = [&](const Grid& g) {
+    std::vector<float> rho(g.size(), 0.0f);
+    for (std::size_t i = 0; i < g.size(); ++i)
+      if (g.valid[i]) {
+        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
+        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
+    return rho;
+  };
+  auto medianRange = [&](const Grid& g, const std::vector<float>& rho) {
+    std::vector<float> valid;
+    for (std::size_t i = 0; i < g.size(); ++i)
+      if (g.valid[i])
+        valid.push_back(rho[i]);
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+    return valid[valid.size() / 2];
+  };
+
+  // Per frame: scalar bandwidths (global model) or a noise profile (range-adaptive model).
   std::vector<Bandwidths> bandwidths(count);
+  std::vector<NoiseProfile> profiles(count);
   std::vector<bool> usable(count, true);
+  auto estimateFrame = [&](int k, const Grid& g, const NormalField* normals, float rho_median) {
+    const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - center) * 7919u;
+    if (adaptive) {
+      profiles[k] = estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed, viewpoint);
+      Bandwidths b;
+      b.sigma_s = profiles[k].sigmaAt(rho_median);
+      b.mu_d = profiles[k].extentAt(rho_median) * rho_median;
+      bandwidths[k] = finishBandwidths(b, parameters);
+    } else {
+      const NormalField own = normals ? NormalField() : estimateNormals(g, parameters.normal_window, viewpoint, threads);
+      bandwidths[k] = finishBandwidths(
+          estimateBandwidths(g, normals ? *normals : own, parameters.search_window, parameters.bandwidth_samples, seed),
+          parameters);
+    }
+  };
+
+  // Neighbour frames are estimated once, from their own data.
+  const float input_rho_median = medianRange(input, rangesOf(input));
   for (int k = 0; k < count; ++k) {
     if (k == center)
       continue;
-    const NormalField nk = estimateNormals(*frames[k], parameters.normal_window, viewpoint, threads);
     try {
-      bandwidths[k] = finishBandwidths(
-          estimateBandwidths(*frames[k], nk, parameters.search_window, parameters.bandwidth_samples,
-                             parameters.seed + static_cast<std::uint64_t>(k - center) * 7919u),
-          parameters);
+      estimateFrame(k, *frames[k], nullptr, input_rho_median);
     } catch (const std::invalid_argument&) {
       usable[k] = false; // an all-NaN neighbour contributes nothing
     }
   }
 
   std::vector<float> offsets;
+  std::vector<std::vector<float>> inverse_d2(count), inverse_s2(count);
   for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
     const Grid& current = run.output;
-    NormalField normals = estimateNormals(current, parameters.normal_window, viewpoint, threads);
-    bandwidths[center] = finishBandwidths(
-        estimateBandwidths(current, normals, parameters.search_window, parameters.bandwidth_samples,
-                           parameters.seed),
-        parameters);
+    const std::vector<float> rho = rangesOf(current);
+    NormalField normals;
+    if (adaptive) {
+      estimateFrame(center, current, nullptr, medianRange(current, rho));
+    } else {
+      normals = estimateNormals(current, parameters.normal_window, viewpoint, threads);
+      estimateFrame(center, current, &normals, 0.0f);
+    }
+    auto gateFor = [&](const std::vector<float>& sig) {
+      std::vector<float> gate;
+      if (parameters.normal_edge_gate > 0.0f) {
+        gate.resize(n);
+        for (std::size_t i = 0; i < n; ++i)
+          gate[i] = parameters.normal_edge_gate * sig[i] / parameters.similarity_scale;
+      }
+      return gate;
+    };
+    // Local noise sigma of every centre point: for the pre-smoothing and the displacement limit.
+    std::vector<float> sigma(n, bandwidths[center].similarity);
+    if (adaptive)
+      for (std::size_t i = 0; i < n; ++i)
+        sigma[i] = current.valid[i] ? parameters.similarity_scale * profiles[center].sigmaAt(rho[i]) : 0.0f;
     if (parameters.normal_presmooth_window > 1) {
-      const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window,
-                                             parameters.normal_presmooth_range * bandwidths[center].sigma_s,
-                                             viewpoint, threads);
-      normals = estimateNormals(smooth, parameters.normal_window, viewpoint, threads);
+      std::vector<float> range_sigma(n);
+      for (std::size_t i = 0; i < n; ++i)
+        range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
+      const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
+      normals = estimateNormals(smooth, parameters.normal_window, viewpoint, threads, gateFor(sigma));
+    } else if (adaptive) {
+      normals = estimateNormals(current, parameters.normal_window, viewpoint, threads, gateFor(sigma));
     }
 
     float s_max = 0.0f;
@@ -189,8 +262,24 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       if (!usable[k])
         continue;
       weights[k] = temporalDistanceWeight(k, center) * temporalNoiseWeight(bandwidths[k].similarity, s_max);
-      terms.push_back(FrameTerm{k == center ? &current : frames[k], bandwidths[k].distance,
-                                bandwidths[k].similarity, weights[k]});
+      FrameTerm term{k == center ? &current : frames[k], bandwidths[k].distance, bandwidths[k].similarity, weights[k]};
+      if (adaptive) {
+        // Per-point bandwidths from frame k's profile at the centre point's range; a bandwidth
+        // given by the user stays global.
+        if (!(parameters.distance_bandwidth > 0.0f)) {
+          inverse_d2[k].resize(n);
+          for (std::size_t i = 0; i < n; ++i)
+            inverse_d2[k][i] = detail::inverseSquare(parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i]);
+          term.inverse_distance2 = &inverse_d2[k];
+        }
+        if (!(parameters.similarity_bandwidth > 0.0f)) {
+          inverse_s2[k].resize(n);
+          for (std::size_t i = 0; i < n; ++i)
+            inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * profiles[k].sigmaAt(rho[i]));
+          term.inverse_similarity2 = &inverse_s2[k];
+        }
+      }
+      terms.push_back(term);
     }
     if (iteration == 0) {
       run.bandwidths = bandwidths;
@@ -198,7 +287,14 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     }
     computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
                    parameters.evaluation, threads, active, offsets);
-    applyOffsets(run.output, normals, offsets, parameters.displacement, viewpoint);
+    std::vector<float> limit;
+    if (parameters.max_displacement > 0.0f) {
+      limit.resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        limit[i] = parameters.max_displacement * sigma[i];
+    }
+    applyOffsets(run.output, normals, offsets, parameters.displacement, viewpoint, limit,
+                 parameters.line_of_sight_min_cos);
   }
   return run;
 }

@@ -35,8 +35,10 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
       double num = 0.0, den = 0.0;
       for (const FrameTerm& term : frames) {
         const Grid& g = *term.grid;
-        const float inv_d2 = inverseSquareInline(term.distance_bandwidth);
-        const float inv_s2 = inverseSquareInline(term.similarity_bandwidth);
+        const float inv_d2 = term.inverse_distance2 ? (*term.inverse_distance2)[i]
+                                                    : inverseSquareInline(term.distance_bandwidth);
+        const float inv_s2 = term.inverse_similarity2 ? (*term.inverse_similarity2)[i]
+                                                      : inverseSquareInline(term.similarity_bandwidth);
         for (int jv = v - r; jv <= v + r; ++jv) {
           for (int ju = u - r; ju <= u + r; ++ju) {
             if (jv < 0 || jv >= height || ju < 0 || ju >= width)

@@ -112,6 +112,25 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
     nz[i] = ok ? normals.nz[i] : 0.0f;
   }
 
+  // 1 / d^2 and 1 / s^2 per centre point and frame (constant maps for scalar bandwidths).
+  std::vector<std::vector<float>> own_maps;
+  own_maps.reserve(2 * frames.size());
+  std::vector<const float*> inv_d2(frames.size()), inv_s2(frames.size());
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    if (frames[f].inverse_distance2) {
+      inv_d2[f] = frames[f].inverse_distance2->data();
+    } else {
+      own_maps.emplace_back(n, inverseSquare(frames[f].distance_bandwidth));
+      inv_d2[f] = own_maps.back().data();
+    }
+    if (frames[f].inverse_similarity2) {
+      inv_s2[f] = frames[f].inverse_similarity2->data();
+    } else {
+      own_maps.emplace_back(n, inverseSquare(frames[f].similarity_bandwidth));
+      inv_s2[f] = own_maps.back().data();
+    }
+  }
+
   const int tiles = (height + kTileRows - 1) / kTileRows;
   const int plen = width + patch_size - 1;
   const std::size_t row_floats = static_cast<std::size_t>(kChannels) * width;
@@ -133,8 +152,6 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
       std::fill(ws.den.begin(), ws.den.end(), 0.0f);
       for (std::size_t f = 0; f < frames.size(); ++f) {
         const PaddedFrame& cand = *frame_ptr[f];
-        const float inv_d2 = inverseSquare(frames[f].distance_bandwidth);
-        const float inv_s2 = inverseSquare(frames[f].similarity_bandwidth);
         const float psi = frames[f].weight;
         for (int dy = -r; dy <= r; ++dy) {
           for (int dx = -r; dx <= r; ++dx) {
@@ -157,7 +174,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
               const std::size_t base = static_cast<std::size_t>(out_row) * width;
               const std::size_t local = static_cast<std::size_t>(out_row - y0) * width;
               kernels.weights(padded_center.row(0, out_row), cand.row(dx, out_row + dy), &act[base], &nx[base],
-                              &ny[base], &nz[base], ws.vrow.data(), width, inv_d2, inv_s2, psi, &ws.num[local],
+                              &ny[base], &nz[base], ws.vrow.data(), width, inv_d2[f] + base, inv_s2[f] + base, psi, &ws.num[local],
                               &ws.den[local]);
             }
           }

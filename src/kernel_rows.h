@@ -31,10 +31,10 @@ struct RowKernels
   /// acc += add - sub (sub may be null), then copy = float(acc) if copy is not null.
   void (*slide)(double* acc, const float* add, const float* sub, float* copy, std::size_t n);
   /// Weights of one output row for one shift, accumulated into num / den:
-  /// w = psi * exp(-(|p_i - p_j|^2 inv_d2 + Sim inv_s2)), Sim = n^T M n / pairs.
+  /// w = psi * exp(-(|p_i - p_j|^2 inv_d2[u] + Sim inv_s2[u])), Sim = n^T M n / pairs.
   void (*weights)(RowPointers c, RowPointers k, const float* active, const float* nx, const float* ny,
-                  const float* nz, const float* m, int width, float inv_d2, float inv_s2, float psi,
-                  float* num, float* den);
+                  const float* nz, const float* m, int width, const float* inv_d2, const float* inv_s2,
+                  float psi, float* num, float* den);
 };
 
 /// The fastest kernels this CPU supports.

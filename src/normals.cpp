@@ -1,4 +1,6 @@
 // Normal estimation over grid neighbourhoods and the edge-preserving pre-smoothing used for it.
+#include "kernel_math.h"
+
 #include <range_nlm/kernel.h>
 
 #include <pcl/common/eigen.h> // pcl::eigen33
@@ -12,6 +14,39 @@ namespace range_nlm
 NormalField
 estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads)
 {
+  return estimateNormals(grid, window, viewpoint, threads, {});
+}
+
+NormalField
+estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                const std::vector<float>& gate)
+{
+  return detail::estimateNormalsGated(grid, window, viewpoint, threads, gate, gate.empty() ? 0 : 2);
+}
+
+namespace detail
+{
+NormalField
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass)
+{
+  // Pass 1 (range gate): neighbours whose range differs from p_i's by more than gate[i] are left
+  // out: no fit across a depth edge, but on steep slopes few neighbours remain. Pass 2 (plane
+  // gate): neighbours farther than gate[i] from pass 1's plane through p_i are left out: the
+  // slope is followed and the edge still excluded.
+  const bool range_gated = pass == 1;
+  const bool plane_gated = pass == 2;
+  const NormalField first =
+      plane_gated ? estimateNormalsGated(grid, window, viewpoint, threads, gate, 1) : NormalField();
+  std::vector<float> rho;
+  if (range_gated) {
+    rho.assign(grid.size(), 0.0f);
+    for (std::size_t i = 0; i < grid.size(); ++i)
+      if (grid.valid[i]) {
+        const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
+        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
+  }
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
   NormalField normals;
@@ -19,6 +54,7 @@ estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int th
   normals.nx.assign(grid.size(), nan);
   normals.ny.assign(grid.size(), nan);
   normals.nz.assign(grid.size(), nan);
+  threads = detail::resolveThreads(threads);
   (void)threads;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
   for (int v = 0; v < height; ++v) {
@@ -33,6 +69,12 @@ estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int th
         for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
           const int j = jv * width + ju;
           if (!grid.valid[j])
+            continue;
+          if (range_gated && std::fabs(rho[j] - rho[i]) > gate[i])
+            continue;
+          if (plane_gated && std::isfinite(first.nx[i]) &&
+              std::fabs((grid.x[j] - grid.x[i]) * first.nx[i] + (grid.y[j] - grid.y[i]) * first.ny[i] +
+                        (grid.z[j] - grid.z[i]) * first.nz[i]) > gate[i])
             continue;
           const double qx = double(grid.x[j]) - grid.x[i];
           const double qy = double(grid.y[j]) - grid.y[i];
@@ -74,8 +116,17 @@ estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int th
   return normals;
 }
 
+} // namespace detail
+
 Grid
 presmoothAlongRays(const Grid& grid, int window, float sigma, const Viewpoint& viewpoint, int threads)
+{
+  return presmoothAlongRays(grid, window, std::vector<float>(grid.size(), sigma), viewpoint, threads);
+}
+
+Grid
+presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                   int threads)
 {
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
@@ -87,28 +138,27 @@ presmoothAlongRays(const Grid& grid, int window, float sigma, const Viewpoint& v
       rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
     }
   Grid out = grid;
-  if (!(sigma > 0.0f))
-    return out;
-  const float inv = 1.0f / (2.0f * sigma * sigma);
+  threads = detail::resolveThreads(threads);
   (void)threads;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
   for (int v = 0; v < height; ++v) {
     for (int u = 0; u < width; ++u) {
       const int i = v * width + u;
-      if (!grid.valid[i] || !(rho[i] > 0.0f))
+      if (!grid.valid[i] || !(rho[i] > 0.0f) || !(sigma[i] > 0.0f))
         continue;
-      double num = 0.0, den = 0.0;
-      for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv)
+      const float inv = 1.0f / (2.0f * sigma[i] * sigma[i]);
+      float num = 0.0f, den = 0.0f;
+      for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv) {
+        const int row = jv * width;
         for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
-          const int j = jv * width + ju;
-          if (!grid.valid[j])
-            continue;
+          const int j = row + ju;
           const float d = rho[j] - rho[i];
-          const double w = std::exp(-d * d * inv);
+          const float w = grid.valid[j] ? detail::expNonPositiveInline(-d * d * inv) : 0.0f;
           num += w * d;
           den += w;
         }
-      const float scale = float((rho[i] + num / den) / rho[i]);
+      }
+      const float scale = (rho[i] + num / den) / rho[i];
       out.x[i] = viewpoint[0] + (grid.x[i] - viewpoint[0]) * scale;
       out.y[i] = viewpoint[1] + (grid.y[i] - viewpoint[1]) * scale;
       out.z[i] = viewpoint[2] + (grid.z[i] - viewpoint[2]) * scale;

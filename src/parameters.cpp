@@ -48,6 +48,12 @@ FilterParameters::validate() const
     fail("normal_window", normal_window, "must be an odd number of pixels >= 3");
   if (normal_presmooth_window < 0 || (normal_presmooth_window > 1 && normal_presmooth_window % 2 == 0))
     fail("normal_presmooth_window", normal_presmooth_window, "must be 0 (off) or odd");
+  if (!(std::isfinite(normal_edge_gate) && normal_edge_gate >= 0.0f))
+    fail("normal_edge_gate", normal_edge_gate, "must be finite and >= 0 (0 = off)");
+  if (!(line_of_sight_min_cos >= 0.0f && line_of_sight_min_cos <= 1.0f))
+    fail("line_of_sight_min_cos", line_of_sight_min_cos, "must be in [0, 1]");
+  if (!(std::isfinite(max_displacement) && max_displacement >= 0.0f))
+    fail("max_displacement", max_displacement, "must be finite and >= 0 (0 = unlimited)");
   if (!(std::isfinite(normal_presmooth_range) && normal_presmooth_range > 0.0f))
     fail("normal_presmooth_range", normal_presmooth_range, "must be finite and > 0");
 }
@@ -72,15 +78,25 @@ FilterParameters::validateFor(int width, int height) const
 FilterParameters
 FilterParameters::paper()
 {
-  return FilterParameters{};
+  FilterParameters p;
+  p.search_window = 7;
+  p.patch_size = 5;
+  p.iterations = 1;
+  p.distance_scale = 0.75f;
+  p.similarity_scale = 1.0f;
+  p.normal_window = 3;
+  p.normal_presmooth_window = 0;
+  p.normal_edge_gate = 0.0f;
+  p.bandwidth_model = BandwidthModel::global;
+  p.max_displacement = 0.0f;
+  p.displacement = Displacement::normal;
+  return p;
 }
 
 FilterParameters
 FilterParameters::recommended()
 {
-  FilterParameters p;
-  p.normal_presmooth_window = 5;
-  return p;
+  return FilterParameters{};
 }
 
 FilterParameters

@@ -173,12 +173,16 @@ TEST(NonLocalMeansFilter, ScaleEquivariance)
   const float lambda = 1000.0f; // metres -> millimetres
   for (auto& q : scaled)
     q.getVector3fMap() *= lambda;
+  // The paper's method is equivariant to float precision. The default adds thresholded
+  // decisions (gated normal fits), which float rounding can flip for a borderline neighbour; the
+  // result still agrees to a small fraction of the noise.
   for (const FilterParameters& p : {FilterParameters::paper(), FilterParameters::recommended()}) {
     Cloud a = filtered(in, p);
     const Cloud b = filtered(scaled, p);
     for (auto& q : a)
       q.getVector3fMap() *= lambda;
-    EXPECT_LT(maxDistance(a, b), 1e-3 * 0.004 * lambda) << p.normal_presmooth_window;
+    const bool paper = p.normal_edge_gate == 0.0f;
+    EXPECT_LT(maxDistance(a, b), (paper ? 1e-3 : 1e-2) * 0.004 * lambda);
   }
 }
 
@@ -231,15 +235,28 @@ TEST(NonLocalMeansFilter, IndicesLimitWhichPointsMove)
   f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
   f.setIndices(indices);
   Cloud out;
+  // One pass: an indexed point gets exactly the value it gets when every point is filtered.
+  f.setParameters(FilterParameters::paper());
   f.filter(out);
   ASSERT_EQ(out.size(), in.size());
-  const Cloud all = filtered(in, FilterParameters::recommended());
+  const Cloud all = filtered(in, FilterParameters::paper());
   for (std::size_t i = 0; i < in.size(); ++i) {
     if (i % 3 == 0)
       EXPECT_EQ(out[i].getVector3fMap(), all[i].getVector3fMap());
     else
       EXPECT_EQ(out[i].getVector3fMap(), in[i].getVector3fMap());
   }
+  // Several passes (the default): the others still never move.
+  f.setParameters(FilterParameters::recommended());
+  f.filter(out);
+  int moved = 0;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    if (i % 3 != 0)
+      EXPECT_EQ(out[i].getVector3fMap(), in[i].getVector3fMap());
+    else
+      moved += out[i].getVector3fMap() != in[i].getVector3fMap();
+  }
+  EXPECT_GT(moved, static_cast<int>(in.size()) / 4);
   indices->push_back(static_cast<int>(in.size()) + 4);
   f.setIndices(indices);
   EXPECT_NE(errorOf([&] { f.filter(out); }).find("outside the cloud"), std::string::npos);
@@ -328,9 +345,9 @@ TEST(NonLocalMeansFilter, BadInputGivesClearErrors)
   f.setInputCloud(unorganized);
   EXPECT_NE(errorOf([&] { f.filter(out); }).find("not organized"), std::string::npos);
 
-  Cloud::Ptr small(new Cloud(noisyPlane(0.001, 1, 6, 6)));
+  Cloud::Ptr small(new Cloud(noisyPlane(0.001, 1, 8, 8)));
   f.setInputCloud(small);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("search_window = 7 is larger than the cloud (6 x 6)"),
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("search_window = 9 is larger than the cloud (8 x 8)"),
             std::string::npos);
 
   Cloud::Ptr cloud(new Cloud(noisyPlane(0.001)));

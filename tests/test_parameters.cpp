@@ -27,11 +27,22 @@ messageOf(const FilterParameters& p, int w = 0, int h = 0)
 TEST(Parameters, DefaultsAreValidAndDocumentedValues)
 {
   const FilterParameters p;
-  EXPECT_EQ(p.search_window, 7);
-  EXPECT_EQ(p.patch_size, 5);
-  EXPECT_EQ(p.iterations, 1);
+  EXPECT_EQ(p.search_window, 9);
+  EXPECT_EQ(p.patch_size, 3);
+  EXPECT_EQ(p.iterations, 2);
+  EXPECT_EQ(p.normal_window, 7);
+  EXPECT_EQ(p.bandwidth_model, range_nlm::BandwidthModel::range_adaptive);
+  EXPECT_EQ(p.displacement, range_nlm::Displacement::normal);
   EXPECT_EQ(p.distance_bandwidth, FilterParameters::automatic);
   EXPECT_EQ(p.similarity_bandwidth, FilterParameters::automatic);
+  const FilterParameters paper = FilterParameters::paper();
+  EXPECT_EQ(paper.search_window, 7);
+  EXPECT_EQ(paper.patch_size, 5);
+  EXPECT_EQ(paper.iterations, 1);
+  EXPECT_EQ(paper.normal_window, 3);
+  EXPECT_EQ(paper.distance_scale, 0.75f);
+  EXPECT_EQ(paper.similarity_scale, 1.0f);
+  EXPECT_EQ(paper.bandwidth_model, range_nlm::BandwidthModel::global);
   EXPECT_NO_THROW(p.validate());
   EXPECT_NO_THROW(FilterParameters::recommended().validate());
   EXPECT_NO_THROW(FilterParameters::paper().validate());
@@ -67,6 +78,15 @@ TEST(Parameters, OtherInvalidValuesAreRejectedByName)
   p = FilterParameters();
   p.similarity_bandwidth = std::numeric_limits<float>::quiet_NaN();
   EXPECT_NE(messageOf(p).find("similarity_bandwidth"), std::string::npos);
+  p = FilterParameters();
+  p.normal_edge_gate = -1.0f;
+  EXPECT_NE(messageOf(p).find("normal_edge_gate"), std::string::npos);
+  p = FilterParameters();
+  p.line_of_sight_min_cos = 1.5f;
+  EXPECT_NE(messageOf(p).find("line_of_sight_min_cos"), std::string::npos);
+  p = FilterParameters();
+  p.max_displacement = -2.0f;
+  EXPECT_NE(messageOf(p).find("max_displacement"), std::string::npos);
   p = FilterParameters();
   p.bandwidth_samples = 0;
   EXPECT_NE(messageOf(p).find("bandwidth_samples"), std::string::npos);

@@ -18,15 +18,26 @@ using Viewpoint = std::array<float, 3>;
 
 /// Least-squares plane normals over a `window` x `window` grid neighbourhood (PCL's
 /// solvePlaneParameters on the neighbourhood covariance), oriented toward `viewpoint`.
-/// Needs at least 3 valid neighbours; otherwise the normal is NaN.
+/// Needs at least 3 valid neighbours; otherwise the normal is NaN. `threads` 0 = all cores
+/// (likewise for every `threads` argument below).
 NormalField
 estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads);
+/// Gated fit, so that a plane does not straddle a depth edge or a crease: a first fit leaves
+/// out neighbours whose range differs from p_i's by more than `gate[i]` (size of the grid); the
+/// second leaves out neighbours farther than `gate[i]` from the first fit's plane through p_i.
+NormalField
+estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                const std::vector<float>& gate);
 
 /// Edge-preserving smoothing of the range along each camera ray, used only to estimate normals:
 /// rho'_i = sum_j w_ij rho_j / sum_j w_ij over a `window` x `window` neighbourhood with
 /// w_ij = exp(-(rho_j - rho_i)^2 / (2 sigma^2)), rho = distance from the viewpoint.
 Grid
 presmoothAlongRays(const Grid& grid, int window, float sigma, const Viewpoint& viewpoint, int threads);
+/// The same with a range bandwidth per point (`sigma[i]`, size of the grid).
+Grid
+presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                   int threads);
 
 /// Automatic bandwidths (METHOD.md step 4), from random valid sample points p_k:
 /// mu_d = mean of the largest distance from p_k to the points of its search window,
@@ -46,14 +57,37 @@ Bandwidths
 estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
                    std::uint64_t seed);
 
+/// Robust noise profile of a frame over range (BandwidthModel::range_adaptive): sampled windows
+/// binned by range rho (distance from the viewpoint); per bin the median range, the median
+/// plane-fit residual sigma (the square root of the smallest eigenvalue of the window's
+/// covariance) and the median window extent (largest distance from the centre) divided by rho.
+/// Values between bin centres are interpolated linearly, beyond them held constant.
+struct NoiseProfile
+{
+  std::vector<float> range, sigma, extent;
+  bool empty() const { return range.empty(); }
+  float sigmaAt(float rho) const;
+  float extentAt(float rho) const;
+};
+
+/// Estimates the noise profile from `samples` random valid points (deterministic per seed).
+/// Throws std::invalid_argument if the grid has no valid point.
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint);
+
 /// One frame of the (temporal) neighbourhood: its points, bandwidths and frame weight
 /// Psi_k = Psi_dk * Psi_sk. The static filter is the case of one frame with weight 1.
+/// Per-point bandwidths (range_adaptive) are given as maps of 1 / d^2 and 1 / s^2 indexed by
+/// the centre point i; when set they replace the scalar bandwidths.
 struct FrameTerm
 {
   const Grid* grid = nullptr;
   float distance_bandwidth = 0.0f;
   float similarity_bandwidth = 0.0f;
   float weight = 1.0f;
+  const std::vector<float>* inverse_distance2 = nullptr;
+  const std::vector<float>* inverse_similarity2 = nullptr;
 };
 
 /// Computes for every point i of `center` the filtered normal offset
@@ -67,10 +101,13 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
                int search_window, int patch_size, Evaluation evaluation, int threads,
                const std::vector<unsigned char>& active, std::vector<float>& offsets);
 
-/// Moves the active points by their offsets: p' = p - h n, or along the line of sight.
+/// Moves the active points by their offsets: p' = p - h n, or along the line of sight. With
+/// `limit` (size of the grid, may be empty) each displacement is clamped to |p' - p| <= limit[i].
+/// Along the line of sight, points whose |cos(normal, ray)| < min_cos move along the normal.
 void
 applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
-             Displacement displacement, const Viewpoint& viewpoint);
+             Displacement displacement, const Viewpoint& viewpoint,
+             const std::vector<float>& limit = {}, float min_cos = 0.25f);
 
 /// Frame weights of the temporal filter: Psi_dk = (1/2)^|k - c|, Psi_sk = exp(-s_k^2 / max s^2).
 float
@@ -103,6 +140,13 @@ expNonPositive(float x);
 /// 1 / b^2 with b = 0 mapped to a huge finite value (only exact matches keep weight).
 float
 inverseSquare(float bandwidth);
+/// estimateNormals with gate pass 0 (none), 1 (range gate only) or 2 (range, then plane gate).
+NormalField
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass);
+/// Thread count for OpenMP: `threads` if > 0, else the runtime's default (1 without OpenMP).
+int
+resolveThreads(int threads);
 } // namespace detail
 
 } // namespace range_nlm

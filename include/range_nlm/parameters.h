@@ -8,6 +8,21 @@
 namespace range_nlm
 {
 
+/// How the automatic bandwidths are chosen.
+enum class BandwidthModel
+{
+  /// One d and one s for the frame: d = distance_scale * mean of the largest window distance,
+  /// s = similarity_scale * mean of the window's standard deviation about the tangent plane
+  /// (the paper). Windows straddling depth edges drag both up.
+  global,
+  /// d and s per point from a robust noise profile of the frame: the sampled windows are binned by
+  /// range (distance from the sensor), and per bin the median plane-fit residual (sigma) and the
+  /// median window extent per unit range are taken. Then s_i = similarity_scale * sigma(rho_i)
+  /// and d_i = distance_scale * extent(rho_i) * rho_i. Depth-camera noise grows with range and
+  /// the pixel footprint grows with range; a single global value suits neither near nor far.
+  range_adaptive
+};
+
 /// How the patch similarity Sim(i, j) is evaluated. Both give the same result to float precision.
 enum class Evaluation
 {
@@ -36,14 +51,19 @@ struct FilterParameters
   /// Value of `distance_bandwidth` / `similarity_bandwidth` that requests automatic estimation.
   static constexpr float automatic = 0.0f;
 
+  // The defaults below are the project's recommended setting, measured on generated scenes
+  // against ground truth (README, "Quality"); paper() gives the literal method (7 / 5 / 1 and no
+  // extensions).
+
   /// S: side of the square search window N(p_i), pixels. Odd, >= 1, no larger than the cloud.
-  /// Default 7 (paper, laser scans).
-  int search_window = 7;
-  /// P: side of the square similarity patch, pixels. Odd, >= 1, no larger than the cloud. Default 5.
-  int patch_size = 5;
-  /// Number of filter passes; normals (and automatic bandwidths) are re-estimated before each.
-  /// >= 1, default 1.
-  int iterations = 1;
+  /// Default 9 (paper: 7).
+  int search_window = 9;
+  /// P: side of the square similarity patch, pixels. Odd, >= 1, no larger than the cloud.
+  /// Default 3 (paper: 5); a small patch keeps points next to an edge similar to their own side.
+  int patch_size = 3;
+  /// Number of filter passes; normals and automatic bandwidths are re-estimated before each.
+  /// >= 1, default 2 (paper: 1).
+  int iterations = 2;
   /// OpenMP threads; 0 = as many as OpenMP offers. Output does not depend on it. >= 0, default 0.
   int threads = 0;
   /// d: distance bandwidth of Phi_d = exp(-|p_i - p_j|^2 / d^2), cloud units (e.g. metres).
@@ -52,23 +72,38 @@ struct FilterParameters
   /// s: similarity bandwidth of Phi_s = exp(-Sim / s^2), cloud units.
   /// 0 = automatic (s = similarity_scale * sigma_s). >= 0, default automatic.
   float similarity_bandwidth = automatic;
-  /// Factor on mu_d for the automatic d (paper: 0.75). > 0.
-  float distance_scale = 0.75f;
-  /// Factor on sigma_s for the automatic s (paper: 1). > 0.
-  float similarity_scale = 1.0f;
+  /// Factor on mu_d (or the window extent) for the automatic d. > 0, default 1.5 (paper: 0.75).
+  float distance_scale = 1.5f;
+  /// Factor on sigma_s (or the local noise sigma) for the automatic s. > 0, default 3 (paper: 1).
+  float similarity_scale = 3.0f;
   /// Seed of the random sample used to estimate the bandwidths. Same seed, same output.
   std::uint64_t seed = 42;
   /// Number of random valid points sampled for the bandwidth estimate. >= 1, default 1000.
   int bandwidth_samples = 1000;
   /// Side of the grid neighbourhood of the least-squares plane fit that gives the normals,
-  /// pixels. Odd, >= 3. Default 3 (the one-ring, as in the paper).
-  int normal_window = 3;
+  /// pixels. Odd, >= 3. Default 7 (paper: 3, the one-ring).
+  int normal_window = 7;
   /// Side of the window of the edge-preserving depth pre-smoothing applied to the copy from
   /// which normals are estimated (not to the output). 0 or 1 = normals from the raw points
-  /// (the paper). Odd or 0.
-  int normal_presmooth_window = 0;
+  /// (the paper). Odd or 0, default 7.
+  int normal_presmooth_window = 7;
   /// Range bandwidth of that pre-smoothing, in units of the estimated noise sigma_s. > 0.
   float normal_presmooth_range = 3.0f;
+  /// Gated normals: neighbours farther than this many noise sigmas from a first plane fit through
+  /// the point are left out of a second fit (so it does not straddle depth edges or creases);
+  /// 0 = off (paper). >= 0, default 3.
+  float normal_edge_gate = 3.0f;
+  /// Smallest |cos| between normal and line of sight used by Displacement::line_of_sight; below
+  /// it the move follows the normal instead (at grazing angles the ray step 1/cos amplifies any
+  /// normal error). In [0, 1], default 0.5.
+  float line_of_sight_min_cos = 0.5f;
+  /// How automatic bandwidths are estimated; see BandwidthModel.
+  /// Default range_adaptive (paper: global).
+  BandwidthModel bandwidth_model = BandwidthModel::range_adaptive;
+  /// Largest displacement of a point, in units of its noise sigma (range_adaptive) or of s
+  /// (global); 0 = unlimited (the paper). A denoiser never needs to move a point by many noise
+  /// sigmas; larger moves come from normals that straddle a depth edge. >= 0.
+  float max_displacement = 0.0f;
   /// Direction of the displacement; see Displacement.
   Displacement displacement = Displacement::normal;
   /// Evaluation of the patch similarity; see Evaluation.
@@ -79,10 +114,10 @@ struct FilterParameters
   /// Throws std::invalid_argument if a window does not fit a width x height cloud.
   void validateFor(int width, int height) const;
 
-  /// The literal method of the paper: 3x3 normals from the raw points, motion along the normal,
-  /// d = 0.75 mu_d, s = sigma_s.
+  /// The literal method of the paper: 7x7 search, 5x5 patch, one pass, 3x3 normals from the raw
+  /// points, motion along the normal, global d = 0.75 mu_d and s = sigma_s.
   static FilterParameters paper();
-  /// The project's recommended setting (the default of the tools).
+  /// The project's recommended setting (the defaults above; the default of the tools).
   static FilterParameters recommended();
   /// Parameters of a named preset ("paper" or "default"); throws std::invalid_argument otherwise.
   static FilterParameters preset(const std::string& name);
