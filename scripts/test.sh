@@ -1,9 +1,7 @@
 #!/usr/bin/env bash
-# Runs the whole test suite (builds first if needed) and prints CTest's summary.
+# Runs the whole test suite: installs what is missing, builds (Release, build/) and prints
+# CTest's summary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [[ ! -f build/CMakeCache.txt ]]; then
-  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
-fi
-cmake --build build -j2
+bash scripts/setup.sh
 ctest --test-dir build --output-on-failure -j2

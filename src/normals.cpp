@@ -26,6 +26,34 @@ estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int th
 
 namespace detail
 {
+namespace
+{
+/// A grid copied into a padded SoA layout (border r, invalid points flag 0 and coordinates 0)
+/// with the range of every point, so neighbourhood loops run over contiguous rows without
+/// bounds checks and vectorize.
+struct PaddedGrid
+{
+  int border, stride;
+  std::vector<float> x, y, z, f, rho;
+  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint) : border(r), stride(g.width + 2 * r)
+  {
+    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * r);
+    x.assign(n, 0.0f), y.assign(n, 0.0f), z.assign(n, 0.0f), f.assign(n, 0.0f), rho.assign(n, 0.0f);
+    for (int v = 0; v < g.height; ++v)
+      for (int u = 0; u < g.width; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * g.width + u;
+        if (!g.valid[i])
+          continue;
+        const std::size_t k = at(u, v);
+        x[k] = g.x[i], y[k] = g.y[i], z[k] = g.z[i], f[k] = 1.0f;
+        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
+        rho[k] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
+  }
+  std::size_t at(int u, int v) const { return static_cast<std::size_t>(v + border) * stride + (u + border); }
+};
+} // namespace
+
 NormalField
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
                      const std::vector<float>& gate, int pass)
@@ -38,17 +66,9 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   const bool plane_gated = pass == 2;
   const NormalField first =
       plane_gated ? estimateNormalsGated(grid, window, viewpoint, threads, gate, 1) : NormalField();
-  std::vector<float> rho;
-  if (range_gated) {
-    rho.assign(grid.size(), 0.0f);
-    for (std::size_t i = 0; i < grid.size(); ++i)
-      if (grid.valid[i]) {
-        const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
-        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
-      }
-  }
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
+  const PaddedGrid pad(grid, r, viewpoint);
   NormalField normals;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   normals.nx.assign(grid.size(), nan);
@@ -56,61 +76,94 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   normals.nz.assign(grid.size(), nan);
   threads = detail::resolveThreads(threads);
   (void)threads;
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-  for (int v = 0; v < height; ++v) {
-    for (int u = 0; u < width; ++u) {
-      const int i = v * width + u;
-      if (!grid.valid[i])
-        continue;
-      // Moments relative to p_i (a local origin keeps the covariance well conditioned).
-      double s[3] = {0, 0, 0}, ss[6] = {0, 0, 0, 0, 0, 0};
-      int count = 0;
-      for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv)
-        for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
-          const int j = jv * width + ju;
-          if (!grid.valid[j])
-            continue;
-          if (range_gated && std::fabs(rho[j] - rho[i]) > gate[i])
-            continue;
-          if (plane_gated && std::isfinite(first.nx[i]) &&
-              std::fabs((grid.x[j] - grid.x[i]) * first.nx[i] + (grid.y[j] - grid.y[i]) * first.ny[i] +
-                        (grid.z[j] - grid.z[i]) * first.nz[i]) > gate[i])
-            continue;
-          const double qx = double(grid.x[j]) - grid.x[i];
-          const double qy = double(grid.y[j]) - grid.y[i];
-          const double qz = double(grid.z[j]) - grid.z[i];
-          s[0] += qx, s[1] += qy, s[2] += qz;
-          ss[0] += qx * qx, ss[1] += qx * qy, ss[2] += qx * qz;
-          ss[3] += qy * qy, ss[4] += qy * qz, ss[5] += qz * qz;
-          ++count;
+#pragma omp parallel num_threads(threads)
+  {
+    // Per row: moments of the neighbourhood relative to p_i (a local origin keeps the float
+    // sums well conditioned), accumulated one neighbour offset at a time over the whole row.
+    std::vector<float> acc(10 * static_cast<std::size_t>(width));
+    std::vector<float> g(width, 1e30f), n0x(width, 0.0f), n0y(width, 0.0f), n0z(width, 0.0f);
+#pragma omp for schedule(dynamic, 4)
+    for (int v = 0; v < height; ++v) {
+      std::fill(acc.begin(), acc.end(), 0.0f);
+      float* __restrict cnt = acc.data();
+      float* __restrict sx = cnt + width;
+      float* __restrict sy = sx + width;
+      float* __restrict sz = sy + width;
+      float* __restrict sxx = sz + width;
+      float* __restrict sxy = sxx + width;
+      float* __restrict sxz = sxy + width;
+      float* __restrict syy = sxz + width;
+      float* __restrict syz = syy + width;
+      float* __restrict szz = syz + width;
+      const std::size_t row = static_cast<std::size_t>(v) * width;
+      for (int u = 0; u < width; ++u) {
+        const std::size_t i = row + u;
+        g[u] = (range_gated || plane_gated) && grid.valid[i] ? gate[i] : 1e30f;
+        const bool has = plane_gated && std::isfinite(first.nx[i]);
+        n0x[u] = has ? first.nx[i] : 0.0f;
+        n0y[u] = has ? first.ny[i] : 0.0f;
+        n0z[u] = has ? first.nz[i] : 0.0f;
+      }
+      const std::size_t c0 = pad.at(0, v);
+      const float* __restrict cx = &pad.x[c0];
+      const float* __restrict cy = &pad.y[c0];
+      const float* __restrict cz = &pad.z[c0];
+      const float* __restrict cr = &pad.rho[c0];
+      const float* __restrict gg = g.data();
+      const float* __restrict ax = n0x.data();
+      const float* __restrict ay = n0y.data();
+      const float* __restrict az = n0z.data();
+      const float range_on = range_gated ? 1.0f : 0.0f;
+      for (int dv = -r; dv <= r; ++dv)
+        for (int du = -r; du <= r; ++du) {
+          const std::size_t k0 = pad.at(du, v + dv);
+          const float* __restrict qx_ = &pad.x[k0];
+          const float* __restrict qy_ = &pad.y[k0];
+          const float* __restrict qz_ = &pad.z[k0];
+          const float* __restrict qf = &pad.f[k0];
+          const float* __restrict qr = &pad.rho[k0];
+#pragma omp simd
+          for (int u = 0; u < width; ++u) {
+            const float qx = qx_[u] - cx[u], qy = qy_[u] - cy[u], qz = qz_[u] - cz[u];
+            const float dr = (qr[u] - cr[u]) * range_on;
+            const float plane = qx * ax[u] + qy * ay[u] + qz * az[u];
+            const float w = (dr * dr <= gg[u] * gg[u] && plane * plane <= gg[u] * gg[u]) ? qf[u] : 0.0f;
+            cnt[u] += w;
+            sx[u] += w * qx, sy[u] += w * qy, sz[u] += w * qz;
+            sxx[u] += w * qx * qx, sxy[u] += w * qx * qy, sxz[u] += w * qx * qz;
+            syy[u] += w * qy * qy, syz[u] += w * qy * qz, szz[u] += w * qz * qz;
+          }
         }
-      if (count < 3)
-        continue;
-      const double inv = 1.0 / count;
-      const double mx = s[0] * inv, my = s[1] * inv, mz = s[2] * inv;
-      // The plane normal is the eigenvector of the smallest eigenvalue (PCL's eigen33, as in
-      // pcl::solvePlaneParameters, but in double: with noise close to the pixel spacing the 3x3
-      // covariance is nearly isotropic and float rounding would decide the normal).
-      Eigen::Matrix3d cov;
-      cov(0, 0) = ss[0] * inv - mx * mx;
-      cov(0, 1) = cov(1, 0) = ss[1] * inv - mx * my;
-      cov(0, 2) = cov(2, 0) = ss[2] * inv - mx * mz;
-      cov(1, 1) = ss[3] * inv - my * my;
-      cov(1, 2) = cov(2, 1) = ss[4] * inv - my * mz;
-      cov(2, 2) = ss[5] * inv - mz * mz;
-      double eigenvalue = 0.0;
-      Eigen::Vector3d normal;
-      pcl::eigen33(cov, eigenvalue, normal);
-      const double len = normal.norm();
-      if (!std::isfinite(len) || len < 0.5)
-        continue;
-      float nx = float(normal.x() / len), ny = float(normal.y() / len), nz = float(normal.z() / len);
-      const float vx = viewpoint[0] - grid.x[i], vy = viewpoint[1] - grid.y[i], vz = viewpoint[2] - grid.z[i];
-      if (nx * vx + ny * vy + nz * vz < 0.0f)
-        nx = -nx, ny = -ny, nz = -nz;
-      normals.nx[i] = nx;
-      normals.ny[i] = ny;
-      normals.nz[i] = nz;
+      for (int u = 0; u < width; ++u) {
+        const std::size_t i = row + u;
+        if (!grid.valid[i] || cnt[u] < 2.5f)
+          continue;
+        // The plane normal is the eigenvector of the smallest eigenvalue (PCL's eigen33, as in
+        // pcl::solvePlaneParameters, but in double: with noise close to the pixel spacing the
+        // covariance is nearly isotropic and float rounding would decide the normal).
+        const double inv = 1.0 / cnt[u];
+        const double mx = sx[u] * inv, my = sy[u] * inv, mz = sz[u] * inv;
+        Eigen::Matrix3d cov;
+        cov(0, 0) = sxx[u] * inv - mx * mx;
+        cov(0, 1) = cov(1, 0) = sxy[u] * inv - mx * my;
+        cov(0, 2) = cov(2, 0) = sxz[u] * inv - mx * mz;
+        cov(1, 1) = syy[u] * inv - my * my;
+        cov(1, 2) = cov(2, 1) = syz[u] * inv - my * mz;
+        cov(2, 2) = szz[u] * inv - mz * mz;
+        double eigenvalue = 0.0;
+        Eigen::Vector3d normal;
+        pcl::eigen33(cov, eigenvalue, normal);
+        const double len = normal.norm();
+        if (!std::isfinite(len) || len < 0.5)
+          continue;
+        float nx = float(normal.x() / len), ny = float(normal.y() / len), nz = float(normal.z() / len);
+        const float vx = viewpoint[0] - grid.x[i], vy = viewpoint[1] - grid.y[i], vz = viewpoint[2] - grid.z[i];
+        if (nx * vx + ny * vy + nz * vz < 0.0f)
+          nx = -nx, ny = -ny, nz = -nz;
+        normals.nx[i] = nx;
+        normals.ny[i] = ny;
+        normals.nz[i] = nz;
+      }
     }
   }
   return normals;
@@ -130,38 +183,47 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
 {
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
-  const std::size_t n = grid.size();
-  std::vector<float> rho(n, 0.0f);
-  for (std::size_t i = 0; i < n; ++i)
-    if (grid.valid[i]) {
-      const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
-      rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
-    }
+  const detail::PaddedGrid pad(grid, r, viewpoint);
   Grid out = grid;
   threads = detail::resolveThreads(threads);
   (void)threads;
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-  for (int v = 0; v < height; ++v) {
-    for (int u = 0; u < width; ++u) {
-      const int i = v * width + u;
-      if (!grid.valid[i] || !(rho[i] > 0.0f) || !(sigma[i] > 0.0f))
-        continue;
-      const float inv = 1.0f / (2.0f * sigma[i] * sigma[i]);
-      float num = 0.0f, den = 0.0f;
-      for (int jv = std::max(0, v - r); jv <= std::min(height - 1, v + r); ++jv) {
-        const int row = jv * width;
-        for (int ju = std::max(0, u - r); ju <= std::min(width - 1, u + r); ++ju) {
-          const int j = row + ju;
-          const float d = rho[j] - rho[i];
-          const float w = grid.valid[j] ? detail::expNonPositiveInline(-d * d * inv) : 0.0f;
-          num += w * d;
-          den += w;
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<float> num(width), den(width), inv(width);
+#pragma omp for schedule(dynamic, 4)
+    for (int v = 0; v < height; ++v) {
+      const std::size_t row = static_cast<std::size_t>(v) * width;
+      for (int u = 0; u < width; ++u)
+        inv[u] = sigma[row + u] > 0.0f ? 1.0f / (2.0f * sigma[row + u] * sigma[row + u]) : 0.0f;
+      std::fill(num.begin(), num.end(), 0.0f);
+      std::fill(den.begin(), den.end(), 0.0f);
+      const float* __restrict cr = &pad.rho[pad.at(0, v)];
+      const float* __restrict iv = inv.data();
+      float* __restrict nu = num.data();
+      float* __restrict de = den.data();
+      for (int dv = -r; dv <= r; ++dv)
+        for (int du = -r; du <= r; ++du) {
+          const std::size_t k0 = pad.at(du, v + dv);
+          const float* __restrict qr = &pad.rho[k0];
+          const float* __restrict qf = &pad.f[k0];
+#pragma omp simd
+          for (int u = 0; u < width; ++u) {
+            const float d = qr[u] - cr[u];
+            const float w = qf[u] * detail::expNonPositiveInline(-d * d * iv[u]);
+            nu[u] += w * d;
+            de[u] += w;
+          }
         }
+      for (int u = 0; u < width; ++u) {
+        const std::size_t i = row + u;
+        if (!grid.valid[i] || !(cr[u] > 0.0f) || !(sigma[i] > 0.0f) || !(den[u] > 0.0f))
+          continue;
+        // rho' = rho + weighted mean range difference; the point stays on its ray.
+        const float scale = (cr[u] + num[u] / den[u]) / cr[u];
+        out.x[i] = viewpoint[0] + (grid.x[i] - viewpoint[0]) * scale;
+        out.y[i] = viewpoint[1] + (grid.y[i] - viewpoint[1]) * scale;
+        out.z[i] = viewpoint[2] + (grid.z[i] - viewpoint[2]) * scale;
       }
-      const float scale = (rho[i] + num / den) / rho[i];
-      out.x[i] = viewpoint[0] + (grid.x[i] - viewpoint[0]) * scale;
-      out.y[i] = viewpoint[1] + (grid.y[i] - viewpoint[1]) * scale;
-      out.z[i] = viewpoint[2] + (grid.z[i] - viewpoint[2]) * scale;
     }
   }
   return out;
