@@ -108,7 +108,42 @@ struct Settings
   bool json = false;
   std::string json_file;
   bool quiet = false;
+  /// Preset of the range_nlm runs (and its name); search window, patch, evaluation and threads
+  /// are set per configuration.
+  std::string preset = "default";
+  FilterParameters parameters;
 };
+
+/// The benchmark's parameters for one configuration.
+FilterParameters
+parametersFor(const Settings& s, int search, int patch, Evaluation evaluation)
+{
+  FilterParameters p = s.parameters;
+  p.search_window = search;
+  p.patch_size = patch;
+  p.evaluation = evaluation;
+  p.threads = s.threads;
+  return p;
+}
+
+/// What the range_nlm runs do besides the window sizes, for the notes of the table.
+std::string
+describe(const Settings& s)
+{
+  const FilterParameters& p = s.parameters;
+  std::ostringstream d;
+  d << "preset '" << s.preset << "': " << p.iterations << " iteration(s), normals " << p.normal_window << "x"
+    << p.normal_window;
+  if (p.normal_presmooth_window > 1)
+    d << " from a " << p.normal_presmooth_window << "x" << p.normal_presmooth_window << " pre-smoothed copy";
+  if (p.normal_edge_gate > 0.0f)
+    d << ", edge gate " << p.normal_edge_gate << " sigma";
+  d << ", " << (p.bandwidth_model == BandwidthModel::range_adaptive ? "range-adaptive" : "global")
+    << " bandwidths";
+  if (p.displacement == Displacement::line_of_sight)
+    d << ", line of sight";
+  return d.str();
+}
 
 /// The frames of one configuration.
 struct Frames
@@ -200,14 +235,11 @@ measure(const Settings& s, const std::string& method, const Frames& frames, int 
 }
 
 Prepare
-prepareStatic(const CloudConstPtr& cloud, Evaluation evaluation, int threads)
+prepareStatic(const CloudConstPtr& cloud, const FilterParameters& parameters)
 {
   return [=] {
-    auto filter = std::make_shared<NonLocalMeansFilter<pcl::PointXYZ>>(); // the default (recommended) setting
-    filter->setSearchWindowSize(kStaticSearch);
-    filter->setPatchSize(kStaticPatch);
-    filter->setNumberOfThreads(threads);
-    filter->setEvaluation(evaluation);
+    auto filter = std::make_shared<NonLocalMeansFilter<pcl::PointXYZ>>();
+    filter->setParameters(parameters);
     filter->setInputCloud(cloud);
     auto output = std::make_shared<Cloud>();
     return std::function<void()>([filter, output] { filter->filter(*output); });
@@ -215,16 +247,13 @@ prepareStatic(const CloudConstPtr& cloud, Evaluation evaluation, int threads)
 }
 
 Prepare
-prepareTemporal(const Frames& frames, Evaluation evaluation, int threads)
+prepareTemporal(const Frames& frames, const FilterParameters& parameters)
 {
   std::deque<CloudConstPtr> window(frames.clouds.begin(), frames.clouds.end());
   const std::size_t center = frames.center;
   return [=] {
     auto filter = std::make_shared<TemporalNonLocalMeansFilter<pcl::PointXYZ>>();
-    filter->setSearchWindowSize(kTemporalSearch);
-    filter->setPatchSize(kTemporalPatch);
-    filter->setNumberOfThreads(threads);
-    filter->setEvaluation(evaluation);
+    filter->setParameters(parameters);
     filter->setFrames(window, center);
     auto output = std::make_shared<Cloud>();
     return std::function<void()>([filter, output] { filter->filter(*output); });
@@ -318,11 +347,12 @@ benchStatic(const Settings& s, const Frames& frames)
 {
   const CloudConstPtr& cloud = frames.clouds[frames.center];
   std::vector<Row> rows;
-  rows.push_back(measure(s, "range_nlm fast", frames, s.runs, true, "default parameters, Evaluation::fast",
-                         prepareStatic(cloud, Evaluation::fast, s.threads)));
-  rows.push_back(measure(s, "range_nlm direct", frames, s.runs, true,
-                         "default parameters, Evaluation::direct",
-                         prepareStatic(cloud, Evaluation::direct, s.threads)));
+  rows.push_back(
+      measure(s, "range_nlm fast", frames, s.runs, true, describe(s) + "; Evaluation::fast",
+              prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast))));
+  rows.push_back(
+      measure(s, "range_nlm direct", frames, s.runs, true, describe(s) + "; Evaluation::direct",
+              prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::direct))));
   rows.push_back(measure(s, "pcl FastBilateralFilterOMP", frames, s.runs, true,
                          "sigma_s 5, sigma_r 0.03; fills NaN pixels with a finite z (PCL #1027)",
                          prepareBilateral(cloud, s.threads)));
@@ -336,17 +366,20 @@ benchTemporal(const Settings& s, const Frames& frames)
 {
   const CloudConstPtr& cloud = frames.clouds[frames.center];
   std::vector<Row> rows;
-  rows.push_back(measure(s, "range_nlm temporal fast", frames, s.runs, true,
-                         "TemporalNonLocalMeansFilter, centre of 3 frames, default parameters",
-                         prepareTemporal(frames, Evaluation::fast, s.threads)));
+  const FilterParameters fast = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast);
+  const FilterParameters direct = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::direct);
+  rows.push_back(
+      measure(s, "range_nlm temporal fast", frames, s.runs, true,
+              "TemporalNonLocalMeansFilter, centre of 3 frames; " + describe(s) + "; Evaluation::fast",
+              prepareTemporal(frames, fast)));
   if (s.all)
     rows.push_back(measure(s, "range_nlm temporal direct", frames, s.runs, true,
-                           "TemporalNonLocalMeansFilter, Evaluation::direct",
-                           prepareTemporal(frames, Evaluation::direct, s.threads)));
+                           "TemporalNonLocalMeansFilter; " + describe(s) + "; Evaluation::direct",
+                           prepareTemporal(frames, direct)));
   else
     rows.push_back(measure(s, "range_nlm temporal direct", frames, 1, false,
                            "Evaluation::direct, timed once without warm-up (--all for warm-up + --runs)",
-                           prepareTemporal(frames, Evaluation::direct, s.threads)));
+                           prepareTemporal(frames, direct)));
   Frames single = frames;
   single.clouds = {cloud};
   single.center = 0;
@@ -361,23 +394,28 @@ benchTemporal(const Settings& s, const Frames& frames)
 
 // ---------------------------------------------------------------------------------------------
 // Phase breakdown: the kernel functions of kernel.h called directly, in the order runFilter
-// calls them, with the default parameters.
+// calls them for the benchmark's parameters (either bandwidth model). The end-to-end filter()
+// is timed in the same rounds, so a mismatch between the two shows when they diverge.
 
-struct Phase
+/// One timed step. Steps run in order and use the results of the earlier ones.
+struct Step
 {
   std::string name;
-  double median_ms = std::numeric_limits<double>::quiet_NaN();
+  /// Runs once per filter() call (setup) or once per iteration.
+  bool per_iteration = true;
+  /// Part of the fast path (false for the direct evaluation and the end-to-end call).
+  bool fast_path = true;
+  bool end_to_end = false;
+  std::function<void()> run;
 };
 
 struct Breakdown
 {
   std::string config;
+  int iterations = 1;
+  std::vector<Step> steps;
   bench::ChildResult result;
-  std::vector<Phase> phases;
-  /// Index of the end-to-end filter() phase; the phases before it (except those listed in
-  /// `outside_sum`) add up to the fast path.
-  std::size_t total_index = 0;
-  std::vector<std::size_t> outside_sum;
+  std::vector<double> median_ms; // per step
 };
 
 Viewpoint
@@ -401,124 +439,240 @@ scaled(Bandwidths b, const FilterParameters& p)
   return b;
 }
 
-/// Static breakdown (one frame) or temporal breakdown (all frames of `frames`).
-Breakdown
-benchBreakdown(const Settings& s, const Frames& frames, int search, int patch, bool with_direct)
+/// Everything the steps of one breakdown share; lives in the child only.
+struct PipelineState
 {
-  const bool temporal = frames.clouds.size() > 1;
-  const std::string n = temporal ? ", " + std::to_string(frames.clouds.size()) + " frames" : "";
-  const std::string window = std::to_string(search) + "x" + std::to_string(search) + "/" +
-                             std::to_string(patch) + "x" + std::to_string(patch);
-  FilterParameters p = FilterParameters::recommended();
-  p.search_window = search;
-  p.patch_size = patch;
-  p.threads = s.threads;
+  std::vector<Grid> grids;
+  std::vector<Bandwidths> bandwidths;
+  std::vector<NoiseProfile> profiles;
+  std::vector<float> rho, sigma, range_sigma, gate, limit, offsets, direct;
+  std::vector<std::vector<float>> inverse_d2, inverse_s2;
+  NormalField normals;
+  Grid smooth, moved;
+  std::vector<FrameTerm> terms;
+};
 
+/// The steps of one filter iteration (plus the once-per-call setup) for `frames` with `p`,
+/// mirroring runFilter.
+std::vector<Step>
+breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct)
+{
+  const std::size_t count = frames.clouds.size(), c = frames.center;
+  const bool temporal = count > 1;
+  const bool adaptive = p.bandwidth_model == BandwidthModel::range_adaptive;
+  const Viewpoint viewpoint = viewpointOf(*frames.clouds[c]);
+  const std::string nf = temporal ? ", " + std::to_string(count) + " frames" : "";
+  const std::string nw = std::to_string(p.normal_window) + "x" + std::to_string(p.normal_window);
+  const std::string window = std::to_string(p.search_window) + "x" + std::to_string(p.search_window) + "/" +
+                             std::to_string(p.patch_size) + "x" + std::to_string(p.patch_size);
+  auto st = std::make_shared<PipelineState>();
+  auto seedOf = [p, c](std::size_t k) {
+    return p.seed + static_cast<std::uint64_t>(static_cast<long long>(k) - static_cast<long long>(c)) * 7919u;
+  };
+  auto rangesOf = [viewpoint](const Grid& g, std::vector<float>& rho) {
+    rho.assign(g.size(), 0.0f);
+    for (std::size_t i = 0; i < g.size(); ++i)
+      if (g.valid[i]) {
+        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
+        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
+  };
+  auto medianOf = [](const Grid& g, const std::vector<float>& rho) {
+    std::vector<float> valid;
+    for (std::size_t i = 0; i < g.size(); ++i)
+      if (g.valid[i])
+        valid.push_back(rho[i]);
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+    return valid[valid.size() / 2];
+  };
+  // Bandwidths of frame k at the median range (range-adaptive) or from its own normals (global).
+  auto estimateFrame = [=](std::size_t k, const NormalField* normals, float rho_median) {
+    const Grid& g = st->grids[k];
+    if (adaptive) {
+      st->profiles[k] = estimateNoiseProfile(g, p.search_window, p.bandwidth_samples, seedOf(k), viewpoint);
+      Bandwidths b;
+      b.sigma_s = st->profiles[k].sigmaAt(rho_median);
+      b.mu_d = st->profiles[k].extentAt(rho_median) * rho_median;
+      st->bandwidths[k] = scaled(b, p);
+    } else {
+      const NormalField own =
+          normals ? NormalField() : estimateNormals(g, p.normal_window, viewpoint, p.threads);
+      st->bandwidths[k] = scaled(
+          estimateBandwidths(g, normals ? *normals : own, p.search_window, p.bandwidth_samples, seedOf(k)),
+          p);
+    }
+  };
+
+  std::vector<Step> steps;
+  steps.push_back({"cloud -> Grid (Grid::fromInterleaved)" + nf, false, true, false, [=] {
+                     st->grids.resize(count);
+                     st->bandwidths.assign(count, Bandwidths());
+                     st->profiles.assign(count, NoiseProfile());
+                     st->inverse_d2.assign(count, {});
+                     st->inverse_s2.assign(count, {});
+                     for (std::size_t k = 0; k < count; ++k)
+                       st->grids[k] = gridOf(*frames.clouds[k]);
+                   }});
+  if (temporal)
+    steps.push_back({std::string("neighbour frames: ") +
+                         (adaptive ? "estimateNoiseProfile" : "estimateNormals + estimateBandwidths") + ", " +
+                         std::to_string(count - 1) + " frames",
+                     false, true, false, [=] {
+                       std::vector<float> rho;
+                       rangesOf(st->grids[c], rho);
+                       const float rho_median = medianOf(st->grids[c], rho);
+                       for (std::size_t k = 0; k < count; ++k)
+                         if (k != c)
+                           estimateFrame(k, nullptr, rho_median);
+                     }});
+  if (adaptive) {
+    steps.push_back({"estimateNoiseProfile (current frame, with its ranges)", true, true, false, [=] {
+                       rangesOf(st->grids[c], st->rho);
+                       estimateFrame(c, nullptr, medianOf(st->grids[c], st->rho));
+                     }});
+  } else {
+    steps.push_back({"estimateNormals " + nw + ", raw points", true, true, false, [=] {
+                       rangesOf(st->grids[c], st->rho);
+                       st->normals = estimateNormals(st->grids[c], p.normal_window, viewpoint, p.threads);
+                     }});
+    steps.push_back({"estimateBandwidths, " + std::to_string(p.bandwidth_samples) + " samples", true, true,
+                     false, [=] { estimateFrame(c, &st->normals, 0.0f); }});
+  }
+  steps.push_back({"per-point noise sigma and edge gates", true, true, false, [=] {
+                     const std::size_t n = st->grids[c].size();
+                     st->sigma.assign(n, st->bandwidths[c].similarity);
+                     if (adaptive)
+                       for (std::size_t i = 0; i < n; ++i)
+                         st->sigma[i] = st->grids[c].valid[i]
+                                            ? p.similarity_scale * st->profiles[c].sigmaAt(st->rho[i])
+                                            : 0.0f;
+                     st->gate.clear();
+                     if (p.normal_edge_gate > 0.0f) {
+                       st->gate.resize(n);
+                       for (std::size_t i = 0; i < n; ++i)
+                         st->gate[i] = p.normal_edge_gate * st->sigma[i] / p.similarity_scale;
+                     }
+                     st->range_sigma.resize(n);
+                     for (std::size_t i = 0; i < n; ++i)
+                       st->range_sigma[i] = p.normal_presmooth_range * st->sigma[i] / p.similarity_scale;
+                   }});
+  if (p.normal_presmooth_window > 1) {
+    const std::string pw = std::to_string(p.normal_presmooth_window);
+    steps.push_back({"presmoothAlongRays " + pw + "x" + pw, true, true, false, [=] {
+                       st->smooth = presmoothAlongRays(st->grids[c], p.normal_presmooth_window,
+                                                       st->range_sigma, viewpoint, p.threads);
+                     }});
+    steps.push_back(
+        {"estimateNormals " + nw + (p.normal_edge_gate > 0.0f ? " gated" : "") + ", pre-smoothed copy", true,
+         true, false, [=] {
+           st->normals = estimateNormals(st->smooth, p.normal_window, viewpoint, p.threads, st->gate);
+         }});
+  } else if (adaptive) {
+    steps.push_back({"estimateNormals " + nw + (p.normal_edge_gate > 0.0f ? " gated" : "") + ", raw points",
+                     true, true, false, [=] {
+                       st->normals =
+                           estimateNormals(st->grids[c], p.normal_window, viewpoint, p.threads, st->gate);
+                     }});
+  }
+  steps.push_back({std::string("frame terms") + (adaptive ? " and per-point 1/d^2, 1/s^2 maps" : ""), true,
+                   true, false, [=] {
+                     const std::size_t n = st->grids[c].size();
+                     float s_max = 0.0f;
+                     for (const Bandwidths& b : st->bandwidths)
+                       s_max = std::max(s_max, b.similarity);
+                     st->terms.clear();
+                     for (std::size_t k = 0; k < count; ++k) {
+                       FrameTerm term{&st->grids[k], st->bandwidths[k].distance, st->bandwidths[k].similarity,
+                                      temporalDistanceWeight(static_cast<int>(k), static_cast<int>(c)) *
+                                          temporalNoiseWeight(st->bandwidths[k].similarity, s_max)};
+                       if (adaptive) {
+                         if (!(p.distance_bandwidth > 0.0f)) {
+                           st->inverse_d2[k].resize(n);
+                           for (std::size_t i = 0; i < n; ++i)
+                             st->inverse_d2[k][i] = detail::inverseSquare(
+                                 p.distance_scale * st->profiles[k].extentAt(st->rho[i]) * st->rho[i]);
+                           term.inverse_distance2 = &st->inverse_d2[k];
+                         }
+                         if (!(p.similarity_bandwidth > 0.0f)) {
+                           st->inverse_s2[k].resize(n);
+                           for (std::size_t i = 0; i < n; ++i)
+                             st->inverse_s2[k][i] = detail::inverseSquare(
+                                 p.similarity_scale * st->profiles[k].sigmaAt(st->rho[i]));
+                           term.inverse_similarity2 = &st->inverse_s2[k];
+                         }
+                       }
+                       st->terms.push_back(term);
+                     }
+                   }});
+  const std::vector<unsigned char> all_active;
+  steps.push_back({"computeOffsets fast " + window + nf, true, true, false, [=] {
+                     computeOffsets(st->grids[c], st->normals, st->terms, p.search_window, p.patch_size,
+                                    Evaluation::fast, p.threads, all_active, st->offsets);
+                     st->moved = st->grids[c]; // the copy applyOffsets moves, outside its timing
+                     st->limit.clear();
+                     if (p.max_displacement > 0.0f) {
+                       st->limit.resize(st->sigma.size());
+                       for (std::size_t i = 0; i < st->sigma.size(); ++i)
+                         st->limit[i] = p.max_displacement * st->sigma[i];
+                     }
+                   }});
+  steps.push_back({"applyOffsets", true, true, false, [=] {
+                     applyOffsets(st->moved, st->normals, st->offsets, p.displacement, viewpoint, st->limit,
+                                  p.line_of_sight_min_cos);
+                   }});
+  if (with_direct)
+    steps.push_back({"computeOffsets direct " + window + nf, true, false, false, [=] {
+                       computeOffsets(st->grids[c], st->normals, st->terms, p.search_window, p.patch_size,
+                                      Evaluation::direct, p.threads, all_active, st->direct);
+                     }});
+  // The end-to-end call, built in the child (the filter object is created on first use).
+  auto filter = std::make_shared<std::function<void()>>();
+  steps.push_back({std::string(temporal ? "TemporalNonLocalMeansFilter" : "NonLocalMeansFilter") +
+                       "::filter() fast, end to end, " + std::to_string(p.iterations) + " iteration(s)",
+                   false, false, true, [=] {
+                     if (!*filter) {
+                       FilterParameters q = p;
+                       q.evaluation = Evaluation::fast;
+                       *filter =
+                           temporal ? prepareTemporal(frames, q)() : prepareStatic(frames.clouds[c], q)();
+                     }
+                     (*filter)();
+                   }});
+  return steps;
+}
+
+Breakdown
+benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& p, bool with_direct)
+{
   Breakdown b;
   b.config = frames.label;
-  const std::vector<std::string> names = {
-      "cloud -> Grid (Grid::fromInterleaved)" + n,
-      "estimateNormals " + std::to_string(p.normal_window) + "x" + std::to_string(p.normal_window) +
-          ", raw points" + n,
-      "estimateBandwidths, " + std::to_string(p.bandwidth_samples) + " samples" + n,
-      "presmoothAlongRays " + std::to_string(p.normal_presmooth_window) + "x" +
-          std::to_string(p.normal_presmooth_window) + " (current frame)",
-      "estimateNormals on the pre-smoothed copy",
-      "computeOffsets fast " + window + n,
-      "applyOffsets",
-      "computeOffsets direct " + window + n,
-      std::string(temporal ? "TemporalNonLocalMeansFilter" : "NonLocalMeansFilter") +
-          "::filter() fast, end to end"};
-  b.total_index = 8;
-  b.outside_sum = {7};
-  for (const std::string& name : names)
-    b.phases.push_back(Phase{name});
-
+  b.iterations = p.iterations;
+  b.steps = breakdownSteps(frames, p, with_direct);
   progress(s, "breakdown [" + frames.label + "], warm-up + " + std::to_string(s.runs) +
                   " round(s) of all phases");
   b.result = bench::runInChild([&] {
-    const std::size_t count = frames.clouds.size(), c = frames.center;
-    const Viewpoint viewpoint = viewpointOf(*frames.clouds[c]);
-    const bool presmooth = p.normal_presmooth_window > 1;
-    const std::vector<unsigned char> all_active;
-    std::vector<Grid> grids(count);
-    std::vector<NormalField> raw(count);
-    std::vector<Bandwidths> bandwidths(count);
-    std::vector<FrameTerm> terms;
-    NormalField normals;
-    Grid smooth, moved;
-    std::vector<float> offsets, direct;
-
-    // The steps in pipeline order (each uses the results of the earlier ones); an empty step
-    // is skipped. Every round runs all of them, so a change of machine load hits every phase
-    // alike instead of whichever phase happened to be timed at the time.
-    std::vector<std::function<void()>> steps(b.phases.size());
-    steps[0] = [&] {
-      for (std::size_t k = 0; k < count; ++k)
-        grids[k] = gridOf(*frames.clouds[k]);
-    };
-    steps[1] = [&] {
-      for (std::size_t k = 0; k < count; ++k)
-        raw[k] = estimateNormals(grids[k], p.normal_window, viewpoint, p.threads);
-      if (!presmooth)
-        normals = raw[c];
-    };
-    steps[2] = [&] {
-      for (std::size_t k = 0; k < count; ++k) {
-        const auto offset = static_cast<std::uint64_t>(static_cast<long long>(k) - static_cast<long long>(c));
-        bandwidths[k] = scaled(estimateBandwidths(grids[k], raw[k], p.search_window, p.bandwidth_samples,
-                                                  p.seed + offset * 7919u),
-                               p);
-      }
-      float s_max = 0.0f;
-      for (const Bandwidths& bw : bandwidths)
-        s_max = std::max(s_max, bw.similarity);
-      terms.clear();
-      for (std::size_t k = 0; k < count; ++k)
-        terms.push_back(FrameTerm{&grids[k], bandwidths[k].distance, bandwidths[k].similarity,
-                                  temporalDistanceWeight(static_cast<int>(k), static_cast<int>(c)) *
-                                      temporalNoiseWeight(bandwidths[k].similarity, s_max)});
-    };
-    if (presmooth) {
-      steps[3] = [&] {
-        smooth = presmoothAlongRays(grids[c], p.normal_presmooth_window,
-                                    p.normal_presmooth_range * bandwidths[c].sigma_s, viewpoint, p.threads);
-      };
-      steps[4] = [&] { normals = estimateNormals(smooth, p.normal_window, viewpoint, p.threads); };
-    }
-    steps[5] = [&] {
-      computeOffsets(grids[c], normals, terms, search, patch, Evaluation::fast, p.threads, all_active,
-                     offsets);
-      moved = grids[c]; // the copy applyOffsets moves, outside its timing
-    };
-    steps[6] = [&] { applyOffsets(moved, normals, offsets, p.displacement, viewpoint); };
-    if (with_direct)
-      steps[7] = [&] {
-        computeOffsets(grids[c], normals, terms, search, patch, Evaluation::direct, p.threads, all_active,
-                       direct);
-      };
-    steps[8] = temporal ? prepareTemporal(frames, Evaluation::fast, p.threads)()
-                        : prepareStatic(frames.clouds[c], Evaluation::fast, p.threads)();
-
-    std::vector<std::vector<double>> samples(steps.size());
+    // Every round runs all steps in pipeline order, so a change of machine load hits every
+    // phase alike instead of whichever phase happened to be timed at the time.
+    std::vector<std::vector<double>> samples(b.steps.size());
     for (int round = -1; round < s.runs; ++round) // round -1 is the warm-up
-      for (std::size_t i = 0; i < steps.size(); ++i) {
-        if (!steps[i])
-          continue;
+      for (std::size_t i = 0; i < b.steps.size(); ++i) {
         const auto start = std::chrono::steady_clock::now();
-        steps[i]();
+        b.steps[i].run();
         if (round >= 0)
           samples[i].push_back(millisecondsSince(start));
       }
     std::vector<double> ms;
     for (const std::vector<double>& sample : samples)
-      ms.push_back(sample.empty() ? std::numeric_limits<double>::quiet_NaN() : bench::median(sample));
+      ms.push_back(bench::median(sample));
     return ms;
   });
-  if (b.result.ok)
-    for (std::size_t i = 0; i < b.phases.size() && i < b.result.values.size(); ++i)
-      b.phases[i].median_ms = b.result.values[i];
-  else
+  if (b.result.ok && b.result.values.size() == b.steps.size())
+    b.median_ms = b.result.values;
+  else if (b.result.ok) {
+    b.result.ok = false;
+    b.result.error = "incomplete breakdown result";
+  }
+  if (!b.result.ok)
     progress(s, "  breakdown failed: " + b.result.error);
   return b;
 }
@@ -548,10 +702,7 @@ benchSequence(const Settings& s, const CloudConstPtr& base)
                   std::to_string(s.sequence_patch) + ", " + std::to_string(m.frames) + " frames of " +
                   std::to_string(m.width) + "x" + std::to_string(m.height));
   m.result = bench::runInChild([&] {
-    FilterParameters p = FilterParameters::recommended();
-    p.search_window = s.sequence_search;
-    p.patch_size = s.sequence_patch;
-    p.threads = s.threads;
+    const FilterParameters p = parametersFor(s, s.sequence_search, s.sequence_patch, Evaluation::fast);
     TemporalStream<pcl::PointXYZ> stream(kTemporalRadius, false, p);
     std::vector<double> push_ms;
     double outputs = 0, max_held = 0, rss_first = 0, rss_last = 0;
@@ -783,41 +934,58 @@ printTable(const Settings& s, const RunInfo& info, const std::vector<std::string
     out << "  [" << i + 1 << "] " << notes[i] << "\n";
 
   for (const Breakdown& b : breakdowns) {
-    out << "\nbreakdown [" << b.config << "], " << s.threads << " thread(s), median per phase over " << s.runs
+    out << "\nbreakdown [" << b.config << "], " << s.threads << " thread(s), " << b.iterations
+        << " iteration(s); median per phase over " << s.runs
         << " round(s) of all phases in pipeline order, after a warm-up round:\n";
     if (!b.result.ok) {
       out << "  FAILED: " << b.result.error << "\n";
       continue;
     }
-    double sum = 0.0;
-    const std::string sum_label = "sum of the fast-path phases";
-    const std::string rest_label = "filter() minus the phases (adaptor copies, noise)";
-    std::size_t nw = std::max(sum_label.size(), rest_label.size());
-    for (const Phase& ph : b.phases)
-      nw = std::max(nw, ph.name.size());
-    const double total = b.phases[b.total_index].median_ms;
-    auto share = [&](double ms) {
-      return std::isfinite(ms) && total > 0.0 ? "  " + fixed(100.0 * ms / total, 1) + " %" : std::string();
-    };
-    for (std::size_t i = 0; i < b.phases.size(); ++i) {
-      if (i == b.total_index)
-        continue;
-      const Phase& ph = b.phases[i];
-      const bool counted = std::find(b.outside_sum.begin(), b.outside_sum.end(), i) == b.outside_sum.end();
-      if (counted && std::isfinite(ph.median_ms))
-        sum += ph.median_ms;
-      out << "  " << std::left << std::setw(static_cast<int>(nw)) << ph.name << std::right << "  "
-          << std::setw(12)
-          << (std::isfinite(ph.median_ms) ? fixed(ph.median_ms, 2) + " ms" : std::string("skipped"))
-          << (counted ? share(ph.median_ms) : "  (not part of the fast path)") << "\n";
+    double once = 0.0, per_iteration = 0.0, total = std::numeric_limits<double>::quiet_NaN();
+    std::string total_name;
+    for (std::size_t i = 0; i < b.steps.size(); ++i) {
+      if (b.steps[i].end_to_end) {
+        total = b.median_ms[i];
+        total_name = b.steps[i].name;
+      } else if (b.steps[i].fast_path) {
+        (b.steps[i].per_iteration ? per_iteration : once) += b.median_ms[i];
+      }
     }
-    out << "  " << std::left << std::setw(static_cast<int>(nw)) << sum_label << std::right << "  "
-        << std::setw(12) << fixed(sum, 2) + " ms" << share(sum) << "\n";
-    out << "  " << std::left << std::setw(static_cast<int>(nw)) << b.phases[b.total_index].name << std::right
-        << "  " << std::setw(12) << fixed(total, 2) + " ms"
-        << "\n";
-    out << "  " << std::left << std::setw(static_cast<int>(nw)) << rest_label << std::right << "  "
-        << std::setw(12) << fixed(total - sum, 2) + " ms" << share(total - sum) << "\n";
+    const double estimate = once + b.iterations * per_iteration;
+    const std::string once_label = "setup phases (once per call)";
+    const std::string iteration_label = "phases of one iteration";
+    const std::string estimate_label =
+        "setup + " + std::to_string(b.iterations) + " x one iteration (expected filter())";
+    const std::string rest_label = "filter() minus expected (adaptor copies, noise)";
+    std::size_t nw = std::max({once_label.size(), iteration_label.size(), estimate_label.size(),
+                               rest_label.size(), total_name.size()});
+    for (const Step& step : b.steps)
+      nw = std::max(nw, step.name.size());
+    auto line = [&](const std::string& name, double ms, const std::string& tail) {
+      out << "  " << std::left << std::setw(static_cast<int>(nw)) << name << std::right << "  "
+          << std::setw(12) << fixed(ms, 2) + " ms" << tail << "\n";
+    };
+    auto share = [&](double ms) {
+      return std::isfinite(ms) && total > 0.0 ? "  " + fixed(100.0 * ms / total, 1) + " % of filter()"
+                                              : std::string();
+    };
+    for (std::size_t i = 0; i < b.steps.size(); ++i) {
+      const Step& step = b.steps[i];
+      if (step.end_to_end)
+        continue;
+      if (!step.fast_path)
+        line(step.name, b.median_ms[i], "  (not part of the fast path)");
+      else
+        line(step.name, b.median_ms[i],
+             (step.per_iteration ? "  x" + std::to_string(b.iterations) : "  x1") +
+                 share(b.median_ms[i] * (step.per_iteration ? b.iterations : 1)));
+    }
+    line(once_label, once, share(once));
+    line(iteration_label, per_iteration,
+         "  x" + std::to_string(b.iterations) + share(per_iteration * b.iterations));
+    line(estimate_label, estimate, share(estimate));
+    line(total_name, total, "");
+    line(rest_label, total - estimate, share(total - estimate));
   }
 
   if (sequence) {
@@ -891,15 +1059,13 @@ printJson(std::ostream& out, const Settings& s, const RunInfo& info, const std::
     out << (i ? ", " : "") << "{\"config\": " << jsonString(b.config)
         << ", \"ok\": " << (b.result.ok ? "true" : "false");
     if (b.result.ok) {
-      out << ", \"phases\": [";
-      for (std::size_t k = 0; k < b.phases.size(); ++k) {
-        const bool counted = k != b.total_index &&
-                             std::find(b.outside_sum.begin(), b.outside_sum.end(), k) == b.outside_sum.end();
-        out << (k ? ", " : "") << "{\"name\": " << jsonString(b.phases[k].name)
-            << ", \"median_ms\": " << jsonNumber(b.phases[k].median_ms)
-            << ", \"fast_path\": " << (counted ? "true" : "false")
-            << ", \"end_to_end\": " << (k == b.total_index ? "true" : "false") << "}";
-      }
+      out << ", \"iterations\": " << b.iterations << ", \"phases\": [";
+      for (std::size_t k = 0; k < b.steps.size(); ++k)
+        out << (k ? ", " : "") << "{\"name\": " << jsonString(b.steps[k].name)
+            << ", \"median_ms\": " << jsonNumber(b.median_ms[k])
+            << ", \"per_iteration\": " << (b.steps[k].per_iteration ? "true" : "false")
+            << ", \"fast_path\": " << (b.steps[k].fast_path ? "true" : "false")
+            << ", \"end_to_end\": " << (b.steps[k].end_to_end ? "true" : "false") << "}";
       out << "]";
     } else {
       out << ", \"error\": " << jsonString(b.result.error);
@@ -952,6 +1118,9 @@ run(int argc, char** argv)
      "directory whose first 3 .pcd frames (name order), cropped to their centre 480x400, form the temporal configuration")
     ("synthetic-frames", "temporal configuration: 3 copies of the --input centre crop with fresh noise instead of --sequence-dir")
     ("config", po::value<std::string>()->default_value("all"), "configurations to time: all, static or temporal")
+    ("preset", po::value<std::string>()->default_value("default"),
+     "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
+    ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")
     ("runs", po::value<int>()->default_value(5), "timed runs per method after one warm-up run; the median is reported")
     ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
     ("all", "also give the temporal direct path a warm-up and --runs runs (default: timed once, it is very slow)")
@@ -977,6 +1146,18 @@ run(int argc, char** argv)
   s.sequence_dir = vm["sequence-dir"].as<std::string>();
   s.synthetic_frames = vm.count("synthetic-frames") > 0;
   s.config = vm["config"].as<std::string>();
+  s.preset = vm["preset"].as<std::string>();
+  try {
+    s.parameters = FilterParameters::preset(s.preset);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--preset: ") + e.what());
+  }
+  const int iterations = vm["iterations"].as<int>();
+  if (iterations < 0)
+    throw UsageError("--iterations " + std::to_string(iterations) +
+                     " is invalid: must be >= 1 (0 = the preset's)");
+  if (iterations > 0)
+    s.parameters.iterations = iterations;
   s.runs = vm["runs"].as<int>();
   const int threads = vm["threads"].as<int>();
   s.all = vm.count("all") > 0;
@@ -1059,8 +1240,11 @@ run(int argc, char** argv)
   if (s.breakdown)
     for (const Frames& f : configs) {
       const bool temporal = f.clouds.size() > 1;
-      breakdowns.push_back(temporal ? benchBreakdown(s, f, kTemporalSearch, kTemporalPatch, false)
-                                    : benchBreakdown(s, f, kStaticSearch, kStaticPatch, true));
+      breakdowns.push_back(
+          temporal
+              ? benchBreakdown(s, f, parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast),
+                               false)
+              : benchBreakdown(s, f, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast), true));
     }
   std::unique_ptr<SequenceMemory> sequence;
   if (s.sequence_memory > 0)
