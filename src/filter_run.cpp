@@ -89,14 +89,12 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
     if (!(len > 0.0f))
       continue;
     vx /= len, vy /= len, vz /= len;
-    const float c = vx * nx + vy * ny + vz * nz;
-    if (std::fabs(c) < min_cos || !(std::fabs(c) > 0.0f)) {
-      // grazing: the ray step would amplify normal errors; follow the normal
-      grid.x[i] -= h * nx;
-      grid.y[i] -= h * ny;
-      grid.z[i] -= h * nz;
-      continue;
-    }
+    // At grazing angles the ray step h / cos would amplify any normal error: |cos| is bounded
+    // below by min_cos (the point still stays on its ray, so a depth image can hold it).
+    float c = vx * nx + vy * ny + vz * nz;
+    const float bound = std::max(min_cos, 1e-3f);
+    if (std::fabs(c) < bound)
+      c = c < 0.0f ? -bound : bound;
     float t = -h / c;
     if (!limit.empty())
       t = std::clamp(t, -limit[i], limit[i]);

@@ -23,6 +23,9 @@ namespace
 {
 
 constexpr int kTileRows = 32;
+/// Up to this patch size the vertical box sums are fresh float sums of P rows (cheaper than
+/// the double running sums, and exact to float rounding); larger patches use running sums.
+constexpr int kMaxDirectPatch = 7;
 
 /// A frame copied into a zero-padded SoA grid; invalid and border points have flag 0 and
 /// coordinates 0, so the inner loops need no bounds checks and never see NaN.
@@ -131,6 +134,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
     }
   }
 
+  const bool direct_vertical = patch_size <= kMaxDirectPatch;
   const int tiles = (height + kTileRows - 1) / kTileRows;
   const int plen = width + patch_size - 1;
   const std::size_t row_floats = static_cast<std::size_t>(kChannels) * width;
@@ -155,7 +159,8 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
         const float psi = frames[f].weight;
         for (int dy = -r; dy <= r; ++dy) {
           for (int dx = -r; dx <= r; ++dx) {
-            std::fill(ws.vacc.begin(), ws.vacc.end(), 0.0);
+            if (!direct_vertical)
+              std::fill(ws.vacc.begin(), ws.vacc.end(), 0.0);
             // D rows y0 - hp .. y1 - 1 + hp feed the output rows y0 .. y1 - 1. The ring has
             // P + 1 slots, so row yy - P (leaving the vertical window now) is still held.
             for (int yy = y0 - hp; yy < y1 + hp; ++yy) {
@@ -168,7 +173,17 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
               kernels.products(padded_center.row(-hp, yy), cand.row(-hp + dx, yy + dy), width, patch_size,
                                ws.prod.data(), slot);
               const int out_row = yy - hp;
-              kernels.slide(ws.vacc.data(), slot, leaving, out_row >= y0 ? ws.vrow.data() : nullptr, row_floats);
+              if (direct_vertical) {
+                // Small patches: fresh float sums of the P rows in the window.
+                if (out_row >= y0) {
+                  const float* rows[kMaxDirectPatch];
+                  for (int t = 0; t < patch_size; ++t)
+                    rows[t] = &ws.ring[static_cast<std::size_t>((k - t) % (patch_size + 1)) * row_floats];
+                  kernels.column_sum(rows, patch_size, row_floats, ws.vrow.data());
+                }
+              } else {
+                kernels.slide(ws.vacc.data(), slot, leaving, out_row >= y0 ? ws.vrow.data() : nullptr, row_floats);
+              }
               if (out_row < y0)
                 continue;
               const std::size_t base = static_cast<std::size_t>(out_row) * width;

@@ -28,7 +28,9 @@ expNonPositiveInline(float x)
   p = p * r + 1.6666665459e-1f;
   p = p * r + 5.0000001201e-1f;
   p = p * r * r + r + 1.0f;
-  const int e = ((__builtin_bit_cast(int, t) - 0x4B400000) + 127) << 23;
+  // Unsigned arithmetic: for a NaN argument the exponent overflows the shift, which is undefined
+  // for int; the bits for every x <= 0 are the same.
+  const unsigned e = (__builtin_bit_cast(unsigned, t) - 0x4B400000u + 127u) << 23;
   const float scale = __builtin_bit_cast(float, e);
   const float result = p * scale;
   return x <= -87.0f ? 0.0f : result;

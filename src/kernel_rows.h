@@ -35,6 +35,17 @@ struct RowKernels
   void (*weights)(RowPointers c, RowPointers k, const float* active, const float* nx, const float* ny,
                   const float* nz, const float* m, int width, const float* inv_d2, const float* inv_s2,
                   float psi, float* num, float* den);
+  /// out[q] = sum of rows[0..count-1][q] (fresh float sums: no running-sum drift).
+  void (*column_sum)(const float* const* rows, int count, std::size_t n, float* out);
+  /// Moments of one neighbour offset for a row of centres (normal estimation): q = p_j - p_i,
+  /// w = flag_j if |rho_j - rho_i| * range_on <= gate and |q . n0| <= gate, then
+  /// acc[0..9] += w * (1, qx, qy, qz, qx qx, qx qy, qx qz, qy qy, qy qz, qz qz), each a row.
+  void (*moments)(RowPointers c, const float* c_rho, RowPointers q, const float* q_rho, const float* gate,
+                  const float* n0x, const float* n0y, const float* n0z, float range_on, int width, float* acc);
+  /// One neighbour offset of the range pre-smoothing: d = rho_j - rho_i,
+  /// w = flag_j exp(-d^2 inv[u]); num += w d; den += w.
+  void (*smoothing)(const float* c_rho, const float* q_rho, const float* q_flag, const float* inv, int width,
+                    float* num, float* den);
 };
 
 /// The fastest kernels this CPU supports.

@@ -1,5 +1,6 @@
 // Normal estimation over grid neighbourhoods and the edge-preserving pre-smoothing used for it.
 #include "kernel_math.h"
+#include "kernel_rows.h"
 
 #include <range_nlm/kernel.h>
 
@@ -69,6 +70,7 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
   const PaddedGrid pad(grid, r, viewpoint);
+  const RowKernels& kernels = rowKernels();
   NormalField normals;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   normals.nx.assign(grid.size(), nan);
@@ -85,16 +87,16 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < height; ++v) {
       std::fill(acc.begin(), acc.end(), 0.0f);
-      float* __restrict cnt = acc.data();
-      float* __restrict sx = cnt + width;
-      float* __restrict sy = sx + width;
-      float* __restrict sz = sy + width;
-      float* __restrict sxx = sz + width;
-      float* __restrict sxy = sxx + width;
-      float* __restrict sxz = sxy + width;
-      float* __restrict syy = sxz + width;
-      float* __restrict syz = syy + width;
-      float* __restrict szz = syz + width;
+      const float* cnt = acc.data();
+      const float* sx = cnt + width;
+      const float* sy = sx + width;
+      const float* sz = sy + width;
+      const float* sxx = sz + width;
+      const float* sxy = sxx + width;
+      const float* sxz = sxy + width;
+      const float* syy = sxz + width;
+      const float* syz = syy + width;
+      const float* szz = syz + width;
       const std::size_t row = static_cast<std::size_t>(v) * width;
       for (int u = 0; u < width; ++u) {
         const std::size_t i = row + u;
@@ -105,34 +107,13 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
         n0z[u] = has ? first.nz[i] : 0.0f;
       }
       const std::size_t c0 = pad.at(0, v);
-      const float* __restrict cx = &pad.x[c0];
-      const float* __restrict cy = &pad.y[c0];
-      const float* __restrict cz = &pad.z[c0];
-      const float* __restrict cr = &pad.rho[c0];
-      const float* __restrict gg = g.data();
-      const float* __restrict ax = n0x.data();
-      const float* __restrict ay = n0y.data();
-      const float* __restrict az = n0z.data();
-      const float range_on = range_gated ? 1.0f : 0.0f;
+      const RowPointers centre{&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0]};
       for (int dv = -r; dv <= r; ++dv)
         for (int du = -r; du <= r; ++du) {
           const std::size_t k0 = pad.at(du, v + dv);
-          const float* __restrict qx_ = &pad.x[k0];
-          const float* __restrict qy_ = &pad.y[k0];
-          const float* __restrict qz_ = &pad.z[k0];
-          const float* __restrict qf = &pad.f[k0];
-          const float* __restrict qr = &pad.rho[k0];
-#pragma omp simd
-          for (int u = 0; u < width; ++u) {
-            const float qx = qx_[u] - cx[u], qy = qy_[u] - cy[u], qz = qz_[u] - cz[u];
-            const float dr = (qr[u] - cr[u]) * range_on;
-            const float plane = qx * ax[u] + qy * ay[u] + qz * az[u];
-            const float w = (dr * dr <= gg[u] * gg[u] && plane * plane <= gg[u] * gg[u]) ? qf[u] : 0.0f;
-            cnt[u] += w;
-            sx[u] += w * qx, sy[u] += w * qy, sz[u] += w * qz;
-            sxx[u] += w * qx * qx, sxy[u] += w * qx * qy, sxz[u] += w * qx * qz;
-            syy[u] += w * qy * qy, syz[u] += w * qy * qz, szz[u] += w * qz * qz;
-          }
+          kernels.moments(centre, &pad.rho[c0], RowPointers{&pad.x[k0], &pad.y[k0], &pad.z[k0], &pad.f[k0]},
+                          &pad.rho[k0], g.data(), n0x.data(), n0y.data(), n0z.data(), range_gated ? 1.0f : 0.0f,
+                          width, acc.data());
         }
       for (int u = 0; u < width; ++u) {
         const std::size_t i = row + u;
@@ -184,6 +165,7 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
   const detail::PaddedGrid pad(grid, r, viewpoint);
+  const detail::RowKernels& kernels = detail::rowKernels();
   Grid out = grid;
   threads = detail::resolveThreads(threads);
   (void)threads;
@@ -197,22 +179,11 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
         inv[u] = sigma[row + u] > 0.0f ? 1.0f / (2.0f * sigma[row + u] * sigma[row + u]) : 0.0f;
       std::fill(num.begin(), num.end(), 0.0f);
       std::fill(den.begin(), den.end(), 0.0f);
-      const float* __restrict cr = &pad.rho[pad.at(0, v)];
-      const float* __restrict iv = inv.data();
-      float* __restrict nu = num.data();
-      float* __restrict de = den.data();
+      const float* cr = &pad.rho[pad.at(0, v)];
       for (int dv = -r; dv <= r; ++dv)
         for (int du = -r; du <= r; ++du) {
           const std::size_t k0 = pad.at(du, v + dv);
-          const float* __restrict qr = &pad.rho[k0];
-          const float* __restrict qf = &pad.f[k0];
-#pragma omp simd
-          for (int u = 0; u < width; ++u) {
-            const float d = qr[u] - cr[u];
-            const float w = qf[u] * detail::expNonPositiveInline(-d * d * iv[u]);
-            nu[u] += w * d;
-            de[u] += w;
-          }
+          kernels.smoothing(cr, &pad.rho[k0], &pad.f[k0], inv.data(), width, num.data(), den.data());
         }
       for (int u = 0; u < width; ++u) {
         const std::size_t i = row + u;

@@ -93,9 +93,9 @@ struct FilterParameters
   /// the point are left out of a second fit (so it does not straddle depth edges or creases);
   /// 0 = off (paper). >= 0, default 3.
   float normal_edge_gate = 3.0f;
-  /// Smallest |cos| between normal and line of sight used by Displacement::line_of_sight; below
-  /// it the move follows the normal instead (at grazing angles the ray step 1/cos amplifies any
-  /// normal error). In [0, 1], default 0.5.
+  /// Smallest |cos| between normal and line of sight used by Displacement::line_of_sight: the
+  /// ray step h / cos is computed with |cos| bounded below by it (at grazing angles 1 / cos would
+  /// amplify any normal error); points always stay on their ray. In [0, 1], default 0.5.
   float line_of_sight_min_cos = 0.5f;
   /// How automatic bandwidths are estimated; see BandwidthModel.
   /// Default range_adaptive (paper: global).
