@@ -2,6 +2,8 @@
 // FastBilateralFilterOMP and MovingLeastSquares in one run, on the same frames, in the paper's
 // configurations, with the peak memory of each method measured in its own child process.
 #include "bench_support.h"
+#include "quality_comparison.h"
+#include "temporal_comparison.h"
 #include "tool_common.h"
 
 #include <range_nlm/kernel.h>
@@ -1134,12 +1136,58 @@ run(int argc, char** argv)
     ("seed", po::value<std::uint64_t>()->default_value(1), "seed of the fresh noise of generated frames")
     ("json", "print one JSON object instead of the table")
     ("json-file", po::value<std::string>(), "also write that JSON object to this file")
+    ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
+    ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
+    ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
+    ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on
   po::positional_options_description positional;
   po::variables_map vm;
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
+
+  if (vm.count("quality") || vm.count("temporal-comparison")) {
+    const bool json = vm.count("json") > 0;
+    std::ostringstream sink;
+    std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
+    std::ostringstream report;
+    if (vm.count("quality")) {
+      quality::Options q = quality::defaultOptions();
+      q.threads = vm["threads"].as<int>();
+      int w = 0, h = 0;
+      char x = 0;
+      std::istringstream size(vm["quality-size"].as<std::string>());
+      if (!(size >> w >> x >> h) || x != 'x' || w < 16 || h < 16)
+        throw UsageError("--quality-size '" + vm["quality-size"].as<std::string>() + "' is invalid: expected WxH, at least 16x16");
+      for (auto& scenario : q.scenarios)
+        scenario.width = w, scenario.height = h;
+      const auto rows = quality::run(q, log);
+      if (json)
+        quality::printJson(rows, report);
+      else
+        quality::printTable(rows, report);
+    } else {
+      temporal::Options t;
+      t.frames = vm["temporal-frames"].as<int>();
+      t.threads = vm["threads"].as<int>();
+      if (t.frames < 3)
+        throw UsageError("--temporal-frames must be at least 3");
+      const auto rows = temporal::run(t, log);
+      if (json)
+        temporal::printJson(rows, report);
+      else
+        temporal::printTable(rows, t, report);
+    }
+    std::cout << report.str();
+    if (vm.count("json-file")) {
+      std::ofstream file(vm["json-file"].as<std::string>());
+      file << report.str();
+      if (!file)
+        throw InputError("cannot write '" + vm["json-file"].as<std::string>() + "'");
+    }
+    return 0;
+  }
 
   Settings s;
   s.input = vm["input"].as<std::string>();
