@@ -1151,7 +1151,7 @@ run(int argc, char** argv)
     const bool json = vm.count("json") > 0;
     std::ostringstream sink;
     std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
-    std::ostringstream report;
+    std::ostringstream report, json_text;
     if (vm.count("quality")) {
       quality::Options q = quality::defaultOptions();
       q.threads = vm["threads"].as<int>();
@@ -1163,6 +1163,7 @@ run(int argc, char** argv)
       for (auto& scenario : q.scenarios)
         scenario.width = w, scenario.height = h;
       const auto rows = quality::run(q, log);
+      quality::printJson(rows, json_text);
       if (json)
         quality::printJson(rows, report);
       else
@@ -1174,6 +1175,7 @@ run(int argc, char** argv)
       if (t.frames < 3)
         throw UsageError("--temporal-frames must be at least 3");
       const auto rows = temporal::run(t, log);
+      temporal::printJson(rows, json_text);
       if (json)
         temporal::printJson(rows, report);
       else
@@ -1182,7 +1184,7 @@ run(int argc, char** argv)
     std::cout << report.str();
     if (vm.count("json-file")) {
       std::ofstream file(vm["json-file"].as<std::string>());
-      file << report.str();
+      file << json_text.str();
       if (!file)
         throw InputError("cannot write '" + vm["json-file"].as<std::string>() + "'");
     }
