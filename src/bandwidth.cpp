@@ -111,7 +111,9 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
   if (candidates.empty())
     throw std::invalid_argument("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
   std::mt19937_64 rng(seed);
-  const int r = search_window / 2;
+  // At least the 3 x 3 neighbourhood: a plane fit needs 4 points, and a 1 x 1 search window (which
+  // moves nothing) must not make the noise estimate impossible.
+  const int r = std::max(1, search_window / 2);
   struct Sample
   {
     float rho, sigma, extent;

@@ -3,9 +3,11 @@
 #include "tool_common.h"
 
 #include <range_nlm/render.h>
-#include <range_nlm/temporal_stream.h>
+#include <range_nlm/temporal_nonlocal_means_filter.h>
 
+#include <algorithm>
 #include <deque>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -99,24 +101,111 @@ struct FrameReport
   Bandwidths bandwidths;
 };
 
-/// The chain of passes, each a TemporalStream, feeding the next.
+/// One pass over the sequence, with the windows of TemporalStream: frame t is filtered with frames
+/// t - r .. t + r (causal: t - r .. t), clipped at the sequence ends, and at most 2r + 1 frames are
+/// held. Unlike TemporalStream it passes a frame that no later result depends on through
+/// unfiltered, as a null cloud: with --resume a finished frame is still read as a neighbour, but
+/// neither filtered nor written again.
+class PassStream
+{
+public:
+  PassStream(const Pass& pass, std::vector<bool> needed) : pass_(pass), needed_(std::move(needed)) {}
+  /// Adds the next frame (null if no needed frame reads it); returns the frames that became ready.
+  std::vector<Cloud::ConstPtr> push(const Cloud::ConstPtr& frame)
+  {
+    window_.push_back(frame);
+    ++pushed_;
+    std::vector<Cloud::ConstPtr> ready;
+    const std::size_t lag = pass_.causal ? 0 : static_cast<std::size_t>(pass_.radius);
+    while (emitted_ + lag < pushed_)
+      ready.push_back(emit());
+    return ready;
+  }
+  std::vector<Cloud::ConstPtr> flush()
+  {
+    std::vector<Cloud::ConstPtr> ready;
+    while (emitted_ < pushed_)
+      ready.push_back(emit());
+    return ready;
+  }
+  const Bandwidths& lastBandwidths() const { return bandwidths_; }
+
+private:
+  Cloud::ConstPtr emit()
+  {
+    const std::size_t t = emitted_++;
+    const std::size_t r = static_cast<std::size_t>(pass_.radius);
+    Cloud::Ptr out;
+    if (needed_[t]) {
+      const std::size_t lo = t >= r ? t - r : 0;
+      const std::size_t hi = pass_.causal ? t : std::min(t + r, pushed_ - 1);
+      const std::deque<Cloud::ConstPtr> frames(window_.begin() + (lo - first_),
+                                               window_.begin() + (hi - first_ + 1));
+      TemporalNonLocalMeansFilter<pcl::PointXYZ> filter;
+      filter.setParameters(pass_.parameters);
+      filter.setFrames(frames, t - lo);
+      out.reset(new Cloud);
+      filter.filter(*out);
+      bandwidths_ = filter.getFrameBandwidths()[t - lo];
+    }
+    while (!window_.empty() && first_ + r < emitted_) { // in no later window
+      window_.pop_front();
+      ++first_;
+    }
+    return out;
+  }
+
+  Pass pass_;
+  std::vector<bool> needed_;
+  std::deque<Cloud::ConstPtr> window_; // frames first_ .. first_ + size - 1
+  std::size_t first_ = 0;
+  std::size_t pushed_ = 0;
+  std::size_t emitted_ = 0;
+  Bandwidths bandwidths_;
+};
+
+/// The frames a pass reads to filter the `needed` ones.
+std::vector<bool>
+framesRead(const Pass& pass, const std::vector<bool>& needed)
+{
+  std::vector<bool> read(needed.size(), false);
+  const std::size_t r = static_cast<std::size_t>(pass.radius);
+  for (std::size_t t = 0; t < needed.size(); ++t)
+    if (needed[t])
+      for (std::size_t k = t >= r ? t - r : 0; k <= (pass.causal ? t : std::min(t + r, needed.size() - 1)); ++k)
+        read[k] = true;
+  return read;
+}
+
+/// The chain of passes, each a PassStream, feeding the next.
 class PassChain
 {
 public:
-  explicit PassChain(const std::vector<Pass>& passes)
+  /// `wanted[t]`: the result of frame t is to be written. From the last pass back, each pass
+  /// filters only the frames that the next one reads.
+  PassChain(const std::vector<Pass>& passes, const std::vector<bool>& wanted)
   {
-    for (const Pass& p : passes)
-      streams_.push_back(std::make_unique<TemporalStream<pcl::PointXYZ>>(p.radius, p.causal, p.parameters));
+    std::vector<std::vector<bool>> needed(passes.size());
+    std::vector<bool> next = wanted;
+    for (std::size_t level = passes.size(); level-- > 0;) {
+      needed[level] = next;
+      next = framesRead(passes[level], next);
+    }
+    inputs_read_ = next;
+    for (std::size_t level = 0; level < passes.size(); ++level)
+      streams_.push_back(std::make_unique<PassStream>(passes[level], needed[level]));
   }
-  /// Pushes a frame through every pass; returns the finished frames.
-  std::vector<Cloud::Ptr> push(const Cloud::ConstPtr& frame) { return feed(0, {frame}, false); }
-  std::vector<Cloud::Ptr> flush() { return feed(0, {}, true); }
+  /// False if no result depends on input frame t: it need not even be loaded.
+  bool inputRead(std::size_t t) const { return inputs_read_[t]; }
+  /// Pushes a frame through every pass; returns the finished frames (null: not wanted).
+  std::vector<Cloud::ConstPtr> push(const Cloud::ConstPtr& frame) { return feed(0, {frame}, false); }
+  std::vector<Cloud::ConstPtr> flush() { return feed(0, {}, true); }
   const Bandwidths& firstPassBandwidths() const { return streams_.front()->lastBandwidths(); }
 
 private:
-  std::vector<Cloud::Ptr> feed(std::size_t level, const std::vector<Cloud::ConstPtr>& in, bool flush)
+  std::vector<Cloud::ConstPtr> feed(std::size_t level, const std::vector<Cloud::ConstPtr>& in, bool flush)
   {
-    std::vector<Cloud::Ptr> out;
+    std::vector<Cloud::ConstPtr> out;
     for (const auto& f : in)
       for (auto& r : streams_[level]->push(f))
         out.push_back(r);
@@ -125,11 +214,53 @@ private:
         out.push_back(r);
     if (level + 1 == streams_.size())
       return out;
-    std::vector<Cloud::ConstPtr> next(out.begin(), out.end());
-    return feed(level + 1, next, flush);
+    return feed(level + 1, out, flush);
   }
-  std::vector<std::unique_ptr<TemporalStream<pcl::PointXYZ>>> streams_;
+  std::vector<std::unique_ptr<PassStream>> streams_;
+  std::vector<bool> inputs_read_;
 };
+
+/// For --resume: removes the temporary files an interrupted run left beside `outputs`
+/// (".NAME.tmpPID", see saveCloudAtomic).
+void
+removeTemporaries(const std::vector<std::string>& outputs)
+{
+  namespace fs = std::filesystem;
+  std::vector<std::string> prefixes;
+  for (const std::string& output : outputs)
+    prefixes.push_back("." + fileName(output) + ".tmp");
+  std::error_code ec;
+  const fs::path dir = fs::path(outputs.front()).parent_path();
+  for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    for (const std::string& prefix : prefixes)
+      if (name.compare(0, prefix.size(), prefix) == 0 &&
+          name.find_first_not_of("0123456789", prefix.size()) == std::string::npos) {
+        fs::remove(entry.path(), ec);
+        break;
+      }
+  }
+}
+
+/// For --resume: `path` holds a complete output of a width x height frame.
+bool
+isFinishedOutput(const std::string& path, bool png, const DepthIntrinsics& intrinsics, unsigned width,
+                 unsigned height)
+{
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    return false;
+  try {
+    if (png) {
+      const Cloud cloud = loadDepthPng(path, intrinsics);
+      return cloud.width == width && cloud.height == height;
+    }
+    const LoadedCloud loaded = loadCloud(path);
+    return loaded.blob.width == width && loaded.blob.height == height;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
 
 /// How results are written: the input's fields (PCD), curvature colour (PCD) or 16-bit depth (PNG).
 struct OutputOptions
@@ -218,6 +349,8 @@ run(int argc, char** argv)
     ("causal", "temporal window uses only past frames (no output delay)")
     ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
     ("overwrite", "allow the output directory to be the input directory")
+    ("resume", "skip frames whose output already exists and is a complete frame of the input's size "
+               "(temporal runs still read them as neighbours); removes temporary files an interrupted run left")
     ("quiet,q", "print nothing but errors")
     ("json", "print a JSON summary instead of per-frame lines")
     ("colorize", po::value<std::string>(),
@@ -279,26 +412,54 @@ run(int argc, char** argv)
     for (std::string& output : outputs)
       output = replaceExtension(output, output_options.png ? ".png" : ".pcd");
 
-  PassChain chain(passes);
+  unsigned width = 0, height = 0;
+  std::vector<bool> wanted(inputs.size(), true);
+  if (vm.count("resume")) {
+    std::error_code ec;
+    if (single ? std::filesystem::equivalent(inputs.front(), outputs.front(), ec)
+               : std::filesystem::equivalent(vm["input-dir"].as<std::string>(),
+                                             vm["output-dir"].as<std::string>(), ec))
+      throw UsageError("--resume cannot be used when the output is the input (every frame would count as finished)");
+    removeTemporaries(outputs);
+    const LoadedCloud first = loadFrame(inputs.front(), intrinsics);
+    width = first.blob.width;
+    height = first.blob.height;
+    for (std::size_t f = 0; f < inputs.size(); ++f)
+      wanted[f] = !isFinishedOutput(outputs[f], output_options.png, intrinsics, width, height);
+  }
+
+  PassChain chain(passes, wanted);
   std::deque<PendingFrame> pending;
   std::vector<FrameReport> reports;
   Progress progress(inputs.size(), quiet || json);
   const auto run_start = std::chrono::steady_clock::now();
-  unsigned width = 0, height = 0;
-  auto finish = [&](const std::vector<Cloud::Ptr>& results, double ms) {
-    for (const Cloud::Ptr& result : results) {
+  std::size_t skipped = 0;
+  auto finish = [&](const std::vector<Cloud::ConstPtr>& results, double ms) {
+    for (const Cloud::ConstPtr& result : results) {
       PendingFrame frame = std::move(pending.front());
       pending.pop_front();
+      if (!result) { // --resume: finished before
+        ++skipped;
+        if (!quiet && !json)
+          std::cout << fileName(frame.output_path) << ": skipped (complete output exists)" << std::endl;
+        progress.update(reports.size() + skipped);
+        continue;
+      }
       writeResult(frame, *result, output_options);
       FrameReport report{fileName(frame.output_path), ms, chain.firstPassBandwidths()};
       printReport(report, quiet, json);
       reports.push_back(report);
-      progress.update(reports.size());
+      progress.update(reports.size() + skipped);
     }
   };
   for (std::size_t f = 0; f < inputs.size(); ++f) {
+    if (!chain.inputRead(f)) { // finished, and no frame still to filter reads it
+      pending.push_back(PendingFrame{LoadedCloud(), inputs[f], outputs[f]});
+      finish(chain.push(nullptr), 0.0);
+      continue;
+    }
     PendingFrame frame{loadFrame(inputs[f], intrinsics), inputs[f], outputs[f]};
-    if (f == 0) {
+    if (width == 0) {
       width = frame.loaded.blob.width;
       height = frame.loaded.blob.height;
     } else if (frame.loaded.blob.width != width || frame.loaded.blob.height != height) {
@@ -309,7 +470,7 @@ run(int argc, char** argv)
     Cloud::Ptr xyz(new Cloud(xyzFromBlob(frame.loaded, inputs[f])));
     pending.push_back(std::move(frame));
     const auto start = std::chrono::steady_clock::now();
-    std::vector<Cloud::Ptr> results;
+    std::vector<Cloud::ConstPtr> results;
     try {
       results = chain.push(xyz);
     } catch (const std::invalid_argument& e) {
@@ -318,15 +479,21 @@ run(int argc, char** argv)
     finish(results, millisecondsSince(start));
   }
   const auto start = std::chrono::steady_clock::now();
-  finish(chain.flush(), millisecondsSince(start));
+  std::vector<Cloud::ConstPtr> results;
+  try {
+    results = chain.flush();
+  } catch (const std::invalid_argument& e) {
+    throw InputError("'" + (pending.empty() ? inputs.back() : pending.front().input_path) + "': " + e.what());
+  }
+  finish(results, millisecondsSince(start));
   progress.finish();
 
   if (json) {
     double total = 0.0;
     for (const auto& r : reports)
       total += r.milliseconds;
-    std::cout << "{\"frames\": " << reports.size() << ", \"width\": " << width << ", \"height\": " << height
-              << ", \"filter_ms_total\": " << total
+    std::cout << "{\"frames\": " << reports.size() << ", \"skipped\": " << skipped << ", \"width\": " << width
+              << ", \"height\": " << height << ", \"filter_ms_total\": " << total
               << ", \"wall_ms\": " << millisecondsSince(run_start) << ", \"outputs\": [";
     for (std::size_t i = 0; i < reports.size(); ++i)
       std::cout << (i ? ", " : "") << "{\"file\": \"" << reports[i].name << "\", \"ms\": " << reports[i].milliseconds
