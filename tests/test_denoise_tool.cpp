@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace range_nlm;
@@ -42,7 +43,8 @@ protected:
   void SetUp() override
   {
     dir_ = fs::temp_directory_path() /
-           ("range_nlm_tool_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("range_nlm_tool_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "in");
   }
