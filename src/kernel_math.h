@@ -1,4 +1,5 @@
-// Internal helpers shared by the direct and the fast kernel (not installed).
+// Internal helpers shared by the kernels (not installed). They have internal linkage, so the
+// baseline and the AVX2 row kernels (kernel_rows*.cpp) each compile their own copy.
 #pragma once
 
 #include <cstdint>
@@ -11,7 +12,7 @@ namespace detail
 
 /// exp(x) for x <= 0 (Cephes-style range reduction and a degree-6 polynomial); branch-free so
 /// that loops calling it vectorize. Results below exp(-87) are flushed to 0.
-inline float
+static inline float
 expNonPositiveInline(float x)
 {
   x = x < -87.0f ? -87.0f : x;
@@ -38,7 +39,7 @@ expNonPositiveInline(float x)
 
 /// Weight of an arbitrary bandwidth: 1 / b^2, with b = 0 giving a huge finite factor so that only
 /// exact matches (argument 0) keep weight 1 and nothing divides by zero.
-inline float
+static inline float
 inverseSquareInline(float bandwidth)
 {
   if (!(bandwidth > 0.0f))

@@ -1,4 +1,5 @@
 // The baseline row kernels and the run-time choice between them and the AVX2 ones.
+#include "kernel_math.h"
 #include "kernel_rows.h"
 
 namespace range_nlm

@@ -17,24 +17,12 @@ using namespace range_nlm;
 
 namespace
 {
-struct Result
-{
-  int status = -1;
-  std::string output; // stdout + stderr
-};
+using Result = test::CommandResult;
 
 Result
 runTool(const std::string& args)
 {
-  const std::string command = std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_denoise " + args + " 2>&1";
-  Result r;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  std::array<char, 4096> buf;
-  while (pipe && std::fgets(buf.data(), buf.size(), pipe))
-    r.output += buf.data();
-  const int status = pipe ? ::pclose(pipe) : -1;
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return test::runTool("range_nlm_denoise", args);
 }
 
 class DenoiseTool : public ::testing::Test

@@ -390,15 +390,8 @@ struct ToolResult
 ToolResult
 runDenoise(const std::string& args)
 {
-  const std::string command = std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_denoise " + args + " 2>&1";
-  ToolResult r;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  char buffer[4096];
-  while (pipe && std::fgets(buffer, sizeof buffer, pipe))
-    r.output += buffer;
-  const int status = pipe ? ::pclose(pipe) : -1;
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const test::CommandResult c = test::runTool("range_nlm_denoise", args);
+  return ToolResult{c.status, c.output};
 }
 
 constexpr int kW = 64, kH = 48;

@@ -52,14 +52,8 @@ struct Result
 Result
 runTool(const std::string& args)
 {
-  Result r;
-  FILE* pipe = ::popen((kTool + " " + args + " 2>&1").c_str(), "r");
-  std::array<char, 4096> buf;
-  while (pipe && std::fgets(buf.data(), buf.size(), pipe))
-    r.output += buf.data();
-  const int status = pipe ? ::pclose(pipe) : -1;
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const test::CommandResult c = test::runCommand(kTool + " " + args);
+  return Result{c.status, c.output};
 }
 
 /// Starts the tool in the background (output to `log`); returns its pid.

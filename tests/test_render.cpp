@@ -503,15 +503,8 @@ struct ToolResult
 ToolResult
 runRender(const std::string& args)
 {
-  const std::string command = std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_render " + args + " 2>&1";
-  ToolResult r;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  std::array<char, 4096> buffer;
-  while (pipe && std::fgets(buffer.data(), buffer.size(), pipe))
-    r.output += buffer.data();
-  const int status = pipe ? ::pclose(pipe) : -1;
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const test::CommandResult c = test::runTool("range_nlm_render", args);
+  return ToolResult{c.status, c.output};
 }
 } // namespace
 
@@ -599,15 +592,8 @@ TEST_F(RenderFiles, DenoiseToolColorizesByCurvature)
   const std::string input = path("in.pcd");
   ASSERT_EQ(pcl::io::savePCDFileBinary(input, cloud), 0);
   auto denoise = [](const std::string& args) {
-    const std::string command = std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_denoise " + args + " 2>&1";
-    ToolResult r;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    std::array<char, 4096> buffer;
-    while (pipe && std::fgets(buffer.data(), buffer.size(), pipe))
-      r.output += buffer.data();
-    const int status = pipe ? ::pclose(pipe) : -1;
-    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
+    const test::CommandResult c = test::runTool("range_nlm_denoise", args);
+    return ToolResult{c.status, c.output};
   };
   ToolResult r = denoise(input + " " + path("plain.pcd") + " --quiet");
   ASSERT_EQ(r.status, 0) << r.output;

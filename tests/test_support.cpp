@@ -4,6 +4,8 @@
 #include <pcl/features/normal_3d.h>
 
 #include <cmath>
+#include <cstdio>
+#include <sys/wait.h>
 #include <limits>
 #include <random>
 
@@ -141,6 +143,25 @@ referenceFilter(const pcl::PointCloud<pcl::PointXYZ>& cloud, int search, int pat
       out.at(u, v).z = float(q.z());
     }
   return out;
+}
+
+CommandResult
+runCommand(const std::string& command)
+{
+  CommandResult r;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  char buffer[4096];
+  while (pipe && std::fgets(buffer, sizeof buffer, pipe))
+    r.output += buffer;
+  const int status = pipe ? ::pclose(pipe) : -1;
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+CommandResult
+runTool(const std::string& tool, const std::string& args)
+{
+  return runCommand(std::string(RANGE_NLM_TOOLS_DIR) + "/" + tool + " " + args);
 }
 
 void

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 
 namespace range_nlm
 {
@@ -43,6 +44,19 @@ planeRmse(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& n,
 /// fixed bandwidths d, s. Invalid points stay NaN.
 pcl::PointCloud<pcl::PointXYZ>
 referenceFilter(const pcl::PointCloud<pcl::PointXYZ>& cloud, int search, int patch, double d, double s);
+
+/// Exit status (-1 if it did not exit normally) and combined stdout + stderr of a command.
+struct CommandResult
+{
+  int status = -1;
+  std::string output;
+};
+/// Runs `command` through the shell with stderr folded into stdout.
+CommandResult
+runCommand(const std::string& command);
+/// Runs the built tool `tool` (e.g. "range_nlm_denoise") with `args`.
+CommandResult
+runTool(const std::string& tool, const std::string& args);
 
 /// Adds NaN holes: each point becomes NaN with probability p.
 void
