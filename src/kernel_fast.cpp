@@ -3,10 +3,12 @@
 // candidate frame):
 //   Sim(i, i + delta) = n_i^T [ sum_{o in O} D(i+o) D(i+o)^T ] n_i / (valid pairs),
 // so the six distinct entries of D D^T and the pair count are box-filtered over the patch once
-// per shift for all pixels. Horizontal sums are fresh float sums of P values (no drift);
-// vertical sums are running sums in double. Rows are processed in fixed tiles, so the output
-// does not depend on the number of threads. Cost per point ~ S^2 (independent of P, up to the
-// P adds of the horizontal sums).
+// per shift for all pixels. Box sums are fresh float sums of P values in each direction (no
+// running-sum drift across depth edges). When the candidate frame is the centre frame, the
+// shifts delta and -delta share their sums: D_{-delta}(u) = -D_delta(u - delta), so
+// M_{-delta}(i) = M_delta(i - delta), and one box filtering serves both (each pixel with its own
+// normal). The image is cut into fixed tiles of rows and columns that fit the caches, so the
+// output does not depend on the number of threads.
 #include "kernel_rows.h"
 
 #include <range_nlm/kernel.h>
@@ -23,9 +25,16 @@ namespace
 {
 
 constexpr int kTileRows = 32;
-/// Up to this patch size the vertical box sums are fresh float sums of P rows (cheaper than
-/// the double running sums, and exact to float rounding); larger patches use running sums.
-constexpr int kMaxDirectPatch = 7;
+constexpr int kTileCols = 128; // at most; less for very wide search windows
+/// Row lengths passed to the row kernels are rounded up to a multiple of this, so that no
+/// scalar remainder loop runs (the extra pixels read padding and write unused sums).
+constexpr int kVectorPad = 16;
+
+int
+roundUp(int n)
+{
+  return (n + kVectorPad - 1) / kVectorPad * kVectorPad;
+}
 
 /// A frame copied into a zero-padded SoA grid; invalid and border points have flag 0 and
 /// coordinates 0, so the inner loops need no bounds checks and never see NaN.
@@ -37,7 +46,8 @@ struct PaddedFrame
 
   PaddedFrame(const Grid& g, int border_) : border(border_), stride(g.width + 2 * border_)
   {
-    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * border);
+    // kVectorPad floats of slack: rounded-up rows may read past the last padded row.
+    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * border) + kVectorPad;
     x.assign(n, 0.0f);
     y.assign(n, 0.0f);
     z.assign(n, 0.0f);
@@ -65,16 +75,32 @@ struct PaddedFrame
   }
 };
 
+/// A per-pixel map in the padded layout of `frame`, `outside` in the border.
+std::vector<float>
+padMap(const PaddedFrame& frame, const float* map, int width, int height, float outside)
+{
+  std::vector<float> out(frame.x.size(), outside);
+  for (int v = 0; v < height; ++v)
+    std::copy(map + static_cast<std::size_t>(v) * width, map + static_cast<std::size_t>(v + 1) * width,
+              &out[frame.index(0, v)]);
+  return out;
+}
+
 struct Workspace
 {
-  std::vector<float> prod;  // kChannels x (width + P - 1): per-pixel products of one D row
-  std::vector<float> ring;  // (P + 1) x kChannels x width: horizontally summed rows
-  std::vector<double> vacc; // kChannels x width: vertical running sums
-  std::vector<float> vrow;  // the same as float, for the weight pass
-  std::vector<float> num, den;
+  std::vector<float> prod;        // kChannels x kRowStride: products of one D row
+  std::vector<float> ring;        // P x kRingFields x kRowStride: box-summed D rows
+  std::vector<const float*> rows; // the ring rows of the current vertical window
+  std::vector<float> maps;        // tile rows x kSideFields x kRowStride: staged per-pixel maps
+  std::vector<float> sums;        // tile rows x 2 x kRowStride: num, den
 };
 
 } // namespace
+
+void
+computeOffsetsDirect(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                     int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
+                     std::vector<float>& offsets);
 
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals,
@@ -82,12 +108,20 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
                    int threads, const std::vector<unsigned char>& active,
                    std::vector<float>& offsets)
 {
-  const RowKernels& kernels = rowKernels();
   const int width = center.width;
   const int height = center.height;
   const int r = search_window / 2;
   const int hp = patch_size / 2;
   const int border = r + hp;
+  // A row of box sums spans a tile row and r columns each side, rounded up to whole vectors; its
+  // products P - 1 more.
+  const int tile_width = std::min(kTileCols, kRowStride - 2 * r - (patch_size - 1) - (kVectorPad - 1));
+  if (tile_width < 16) {
+    // Search windows of about kRowStride pixels and more: only the literal evaluation.
+    computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
+    return;
+  }
+  const RowKernels& kernels = rowKernels();
 
   const PaddedFrame padded_center(center, border);
   // The centre frame's own term reuses padded_center; other frames get their own copy.
@@ -102,104 +136,121 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
     }
   }
 
-  // Per point: 1 if the offset is computed (valid, selected, with a normal); normals zeroed
-  // elsewhere so that no NaN enters the arithmetic.
+  // Per point: computed or not (valid, selected, with a normal). Normals are zeroed elsewhere so
+  // that no NaN enters the arithmetic; the weight sums of such points are formed but not used.
   const std::size_t n = center.size();
-  std::vector<float> act(n), nx(n), ny(n), nz(n);
+  std::vector<unsigned char> act(n);
+  std::vector<float> nx(n), ny(n), nz(n);
   for (std::size_t i = 0; i < n; ++i) {
     const bool ok = center.valid[i] && (active.empty() || active[i]) && std::isfinite(normals.nx[i]) &&
                     std::isfinite(normals.ny[i]) && std::isfinite(normals.nz[i]);
-    act[i] = ok ? 1.0f : 0.0f;
+    act[i] = ok ? 1 : 0;
     nx[i] = ok ? normals.nx[i] : 0.0f;
     ny[i] = ok ? normals.ny[i] : 0.0f;
     nz[i] = ok ? normals.nz[i] : 0.0f;
   }
+  const std::vector<float> pnx = padMap(padded_center, nx.data(), width, height, 0.0f);
+  const std::vector<float> pny = padMap(padded_center, ny.data(), width, height, 0.0f);
+  const std::vector<float> pnz = padMap(padded_center, nz.data(), width, height, 0.0f);
 
-  // 1 / d^2 and 1 / s^2 per centre point and frame (constant maps for scalar bandwidths).
-  std::vector<std::vector<float>> own_maps;
-  own_maps.reserve(2 * frames.size());
-  std::vector<const float*> inv_d2(frames.size()), inv_s2(frames.size());
+  // 1 / d^2 and 1 / s^2 per centre point and frame, padded (constant for scalar bandwidths).
+  std::vector<std::vector<float>> inv_d2(frames.size()), inv_s2(frames.size());
   for (std::size_t f = 0; f < frames.size(); ++f) {
-    if (frames[f].inverse_distance2) {
-      inv_d2[f] = frames[f].inverse_distance2->data();
-    } else {
-      own_maps.emplace_back(n, inverseSquare(frames[f].distance_bandwidth));
-      inv_d2[f] = own_maps.back().data();
-    }
-    if (frames[f].inverse_similarity2) {
-      inv_s2[f] = frames[f].inverse_similarity2->data();
-    } else {
-      own_maps.emplace_back(n, inverseSquare(frames[f].similarity_bandwidth));
-      inv_s2[f] = own_maps.back().data();
-    }
+    const std::size_t size = padded_center.x.size();
+    inv_d2[f] = frames[f].inverse_distance2
+                    ? padMap(padded_center, frames[f].inverse_distance2->data(), width, height, 0.0f)
+                    : std::vector<float>(size, inverseSquare(frames[f].distance_bandwidth));
+    inv_s2[f] = frames[f].inverse_similarity2
+                    ? padMap(padded_center, frames[f].inverse_similarity2->data(), width, height, 0.0f)
+                    : std::vector<float>(size, inverseSquare(frames[f].similarity_bandwidth));
   }
 
-  const bool direct_vertical = patch_size <= kMaxDirectPatch;
-  const int tiles = (height + kTileRows - 1) / kTileRows;
-  const int plen = width + patch_size - 1;
-  const std::size_t row_floats = static_cast<std::size_t>(kChannels) * width;
+  const int tile_rows = (height + kTileRows - 1) / kTileRows;
+  const int tile_cols = (width + tile_width - 1) / tile_width;
+  const int tiles = tile_rows * tile_cols;
+  constexpr std::size_t kRow = kRowStride;
+  const std::size_t slot_floats = kRingFields * kRow;
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
     Workspace ws;
-    ws.prod.resize(static_cast<std::size_t>(kChannels) * plen);
-    ws.ring.resize(static_cast<std::size_t>(patch_size + 1) * row_floats);
-    ws.vacc.resize(row_floats);
-    ws.vrow.resize(row_floats);
-    ws.num.resize(static_cast<std::size_t>(kTileRows) * width);
-    ws.den.resize(static_cast<std::size_t>(kTileRows) * width);
+    ws.prod.resize(kChannels * kRow);
+    ws.ring.resize(static_cast<std::size_t>(patch_size) * slot_floats);
+    ws.rows.resize(patch_size);
+    ws.maps.resize(static_cast<std::size_t>(kTileRows) * kSideFields * kRow);
+    ws.sums.resize(static_cast<std::size_t>(kTileRows) * 2 * kRow);
 #pragma omp for schedule(dynamic, 1)
     for (int tile = 0; tile < tiles; ++tile) {
-      const int y0 = tile * kTileRows;
+      const int y0 = (tile / tile_cols) * kTileRows;
       const int y1 = std::min(height, y0 + kTileRows);
-      std::fill(ws.num.begin(), ws.num.end(), 0.0f);
-      std::fill(ws.den.begin(), ws.den.end(), 0.0f);
+      const int x0 = (tile % tile_cols) * tile_width;
+      const int x1 = std::min(width, x0 + tile_width);
+      std::fill(ws.sums.begin(), ws.sums.end(), 0.0f);
+      // Staged data of pixel (u, v): v in the tile, u up to r columns beyond it on either side.
+      const auto col = [&](int u) { return static_cast<std::size_t>(u - x0 + r); };
+      const auto side = [&](int u, int v) {
+        return WeightSide{&ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow + col(u)],
+                          &ws.sums[static_cast<std::size_t>(v - y0) * 2 * kRow + col(u)]};
+      };
       for (std::size_t f = 0; f < frames.size(); ++f) {
+        // Stage this frame's per-pixel maps of the tile rows.
+        for (int v = y0; v < y1; ++v) {
+          const std::size_t k = padded_center.index(x0 - r, v);
+          float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow];
+          const std::size_t len = static_cast<std::size_t>(x1 - x0 + 2 * r);
+          std::copy_n(&pnx[k], len, out);
+          std::copy_n(&pny[k], len, out + kRow);
+          std::copy_n(&pnz[k], len, out + 2 * kRow);
+          std::copy_n(&inv_d2[f][k], len, out + 3 * kRow);
+          std::copy_n(&inv_s2[f][k], len, out + 4 * kRow);
+        }
         const PaddedFrame& cand = *frame_ptr[f];
         const float psi = frames[f].weight;
+        const bool paired = &cand == &padded_center;
         for (int dy = -r; dy <= r; ++dy) {
           for (int dx = -r; dx <= r; ++dx) {
-            if (!direct_vertical)
-              std::fill(ws.vacc.begin(), ws.vacc.end(), 0.0);
-            // D rows y0 - hp .. y1 - 1 + hp feed the output rows y0 .. y1 - 1. The ring has
-            // P + 1 slots, so row yy - P (leaving the vertical window now) is still held.
-            for (int yy = y0 - hp; yy < y1 + hp; ++yy) {
-              const int k = yy - (y0 - hp);
-              float* slot = &ws.ring[static_cast<std::size_t>(k % (patch_size + 1)) * row_floats];
-              const float* leaving =
-                  k >= patch_size
-                      ? &ws.ring[static_cast<std::size_t>((k - patch_size) % (patch_size + 1)) * row_floats]
-                      : nullptr;
-              kernels.products(padded_center.row(-hp, yy), cand.row(-hp + dx, yy + dy), width, patch_size,
-                               ws.prod.data(), slot);
-              const int out_row = yy - hp;
-              if (direct_vertical) {
-                // Small patches: fresh float sums of the P rows in the window.
-                if (out_row >= y0) {
-                  const float* rows[kMaxDirectPatch];
-                  for (int t = 0; t < patch_size; ++t)
-                    rows[t] = &ws.ring[static_cast<std::size_t>((k - t) % (patch_size + 1)) * row_floats];
-                  kernels.column_sum(rows, patch_size, row_floats, ws.vrow.data());
-                }
-              } else {
-                kernels.slide(ws.vacc.data(), slot, leaving, out_row >= y0 ? ws.vrow.data() : nullptr, row_floats);
-              }
-              if (out_row < y0)
+            if (paired && (dy < 0 || (dy == 0 && dx < 0)))
+              continue; // served by the shift -delta
+            if (paired && dy == 0 && dx == 0) {
+              // j = i: D = 0, Sim = 0, weight psi, no offset term.
+              for (int v = y0; v < y1; ++v)
+                for (int u = x0; u < x1; ++u)
+                  side(u, v).sums[kRow] += psi * padded_center.f[padded_center.index(u, v)];
+              continue;
+            }
+            // Box sums are needed on rows ya .. y1 - 1 and columns xs .. xe - 1: at the tile's
+            // pixels i, and for a pair also at i - delta.
+            const int ya = paired ? y0 - dy : y0;
+            const int xs = paired ? x0 - std::max(dx, 0) : x0;
+            const int xe = paired ? x1 - std::min(dx, 0) : x1;
+            for (int yy = ya - hp; yy < y1 + hp; ++yy) {
+              const int k = yy - (ya - hp);
+              kernels.box_row(padded_center.row(xs - hp, yy), cand.row(xs - hp + dx, yy + dy), roundUp(xe - xs), patch_size,
+                              ws.prod.data(), &ws.ring[static_cast<std::size_t>(k % patch_size) * slot_floats]);
+              const int y = yy - hp; // the row whose vertical window is now complete
+              if (y < ya)
                 continue;
-              const std::size_t base = static_cast<std::size_t>(out_row) * width;
-              const std::size_t local = static_cast<std::size_t>(out_row - y0) * width;
-              kernels.weights(padded_center.row(0, out_row), cand.row(dx, out_row + dy), &act[base], &nx[base],
-                              &ny[base], &nz[base], ws.vrow.data(), width, inv_d2[f] + base, inv_s2[f] + base, psi, &ws.num[local],
-                              &ws.den[local]);
+              // Side a: pixels (u, y) of the tile with candidates (u + dx, y + dy). Side b: pixels
+              // (u + dx, y + dy) of the tile with candidates (u, y), the shift -delta.
+              const bool side_a = y >= y0;
+              const bool side_b = paired && y + dy < y1;
+              const int u0 = side_a ? (side_b ? xs : x0) : x0 - dx;
+              const int u1 = side_a ? (side_b ? xe : x1) : x1 - dx;
+              for (int t = 0; t < patch_size; ++t)
+                ws.rows[t] = &ws.ring[static_cast<std::size_t>((k - t) % patch_size) * slot_floats] + (u0 - xs);
+              const BoxRows box{ws.rows.data(), patch_size};
+              const WeightSide a = side_a ? side(u0, y) : WeightSide{};
+              const WeightSide b = side_b ? side(u0 + dx, y + dy) : WeightSide{};
+              kernels.shift_weights(box, roundUp(u1 - u0), psi, side_a ? &a : nullptr, side_b ? &b : nullptr);
             }
           }
         }
       }
       for (int v = y0; v < y1; ++v)
-        for (int u = 0; u < width; ++u) {
+        for (int u = x0; u < x1; ++u) {
           const std::size_t i = static_cast<std::size_t>(v) * width + u;
-          const std::size_t t = static_cast<std::size_t>(v - y0) * width + u;
-          offsets[i] = (act[i] > 0.0f && ws.den[t] > 0.0f) ? ws.num[t] / ws.den[t] : 0.0f;
+          const WeightSide s = side(u, v);
+          offsets[i] = (act[i] && s.sums[kRow] > 0.0f) ? s.sums[0] / s.sums[kRow] : 0.0f;
         }
     }
   }

@@ -2,6 +2,8 @@
 #include "kernel_math.h"
 #include "kernel_rows.h"
 
+#include <cstdlib>
+
 namespace range_nlm
 {
 namespace detail
@@ -13,6 +15,8 @@ namespace baseline
 
 const RowKernels&
 avx2RowKernels();
+const RowKernels&
+avx512RowKernels();
 
 const RowKernels&
 baselineRowKernels()
@@ -23,6 +27,13 @@ baselineRowKernels()
 const RowKernels&
 rowKernels()
 {
+#if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX512_KERNELS)
+  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+                             std::getenv("RANGE_NLM_NO_AVX512") == nullptr;
+  if (avx512)
+    return avx512RowKernels();
+#endif
 #if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX2_KERNELS)
   static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   if (avx2)

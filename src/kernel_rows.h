@@ -22,21 +22,47 @@ struct RowPointers
   const float* f;
 };
 
+/// Fixed distance between the fields of one row in the box-filter buffers (ring rows, products,
+/// staged per-pixel maps, weight sums), so that the hot loops address every field from one
+/// pointer. A row of box sums holds at most this many pixels.
+constexpr int kRowStride = 1040;
+/// Fields of a ring row: the kChannels box-summed channels, then the unfiltered D (x, y, z) and
+/// the pair flag of the row's own pixels.
+constexpr int kRingFields = kChannels + 4;
+/// Fields of the staged per-pixel maps of a weight side: nx, ny, nz, 1 / d^2, 1 / s^2.
+constexpr int kSideFields = 5;
+
+/// The ring of horizontally box-summed rows whose sum is the vertical box sum: P rows (oldest
+/// last), each kRingFields x kRowStride floats, offset to the first pixel; the middle one is
+/// the row whose weights are formed.
+struct BoxRows
+{
+  const float* const* rows;
+  int count;
+};
+
+/// The output pixels one side of a shift updates: their staged maps (kSideFields fields) and
+/// weight sums (num, then den, kRowStride apart), offset to the first pixel.
+struct WeightSide
+{
+  const float* maps;
+  float* sums;
+};
+
 struct RowKernels
 {
-  /// Products D D^T (and the pair flag) for `width + patch - 1` pixels of centre row c and
-  /// candidate row k (both already offset to the first pixel), then their horizontal box sums
-  /// over `patch` pixels into out[ch * width + u].
-  void (*products)(RowPointers c, RowPointers k, int width, int patch, float* prod, float* out);
-  /// acc += add - sub (sub may be null), then copy = float(acc) if copy is not null.
-  void (*slide)(double* acc, const float* add, const float* sub, float* copy, std::size_t n);
-  /// Weights of one output row for one shift, accumulated into num / den:
-  /// w = psi * exp(-(|p_i - p_j|^2 inv_d2[u] + Sim inv_s2[u])), Sim = n^T M n / pairs.
-  void (*weights)(RowPointers c, RowPointers k, const float* active, const float* nx, const float* ny,
-                  const float* nz, const float* m, int width, const float* inv_d2, const float* inv_s2,
-                  float psi, float* num, float* den);
-  /// out[q] = sum of rows[0..count-1][q] (fresh float sums: no running-sum drift).
-  void (*column_sum)(const float* const* rows, int count, std::size_t n, float* out);
+  /// Products D D^T (and the pair flag) for `n + patch - 1` pixels of centre row c and candidate
+  /// row k (both offset to the first pixel; prod holds kChannels x kRowStride floats), then their
+  /// horizontal box sums over `patch` pixels into the first kChannels fields of the ring row
+  /// `out`, and the unfiltered D and flag of the n middle pixels into its last 4 fields.
+  void (*box_row)(RowPointers c, RowPointers k, int n, int patch, float* prod, float* out);
+  /// For n pixels u of one shift delta: M = the vertical box sum of `box`, D and flag m from its
+  /// middle row, Sim = n^T M n / pairs, and per side
+  ///   w = psi m exp(-(|D|^2 inv_d2 + Sim inv_s2)), num += w h, den += w
+  /// with h = n . D for side a (the pixels of the D row, candidates p + delta) and h = -n . D for
+  /// side b (the candidate pixels, whose candidates p - delta give the same D D^T). a or b may
+  /// be null.
+  void (*shift_weights)(const BoxRows& box, int n, float psi, const WeightSide* a, const WeightSide* b);
   /// Moments of one neighbour offset for a row of centres (normal estimation): q = p_j - p_i,
   /// w = flag_j if |rho_j - rho_i| * range_on <= gate and |q . n0| <= gate, then
   /// acc[0..9] += w * (1, qx, qy, qz, qx qx, qx qy, qx qz, qy qy, qy qz, qz qz), each a row.

@@ -73,6 +73,37 @@ TEST(Kernel, FastMatchesDirectWithSeveralFrames)
   EXPECT_LT(maxDifference(fast, direct), 2e-6);
 }
 
+TEST(Kernel, FastMatchesDirectAcrossTilesWithPerPointBandwidths)
+{
+  // Larger than one tile of the box-filtered evaluation in both directions (and not a multiple of
+  // it), with holes, per-point bandwidth maps and three frames: shifts that cross tile borders,
+  // and the shared +delta / -delta sums of the centre frame, must give the literal formula.
+  const Viewpoint origin{0, 0, 0};
+  const int w = 300, h = 75;
+  const Grid a = randomSurface(w, h, 0.1, 11), b = randomSurface(w, h, 0.1, 12), c = randomSurface(w, h, 0.1, 13);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  std::vector<float> inv_d2(b.size()), inv_s2(b.size());
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    inv_d2[i] = 1.0f / std::pow(0.015f + 0.00002f * float(i % 997), 2.0f);
+    inv_s2[i] = 1.0f / std::pow(0.003f + 0.000003f * float(i % 661), 2.0f);
+  }
+  FrameTerm centre{&b, 0.0f, 0.0f, 1.0f};
+  centre.inverse_distance2 = &inv_d2;
+  centre.inverse_similarity2 = &inv_s2;
+  const std::vector<FrameTerm> terms{{&a, 0.03f, 0.005f, 0.3f}, centre, {&c, 0.025f, 0.006f, 0.2f}};
+  std::vector<float> fast, direct;
+  computeOffsets(b, normals, terms, 9, 5, Evaluation::fast, 2, {}, fast);
+  computeOffsets(b, normals, terms, 9, 5, Evaluation::direct, 2, {}, direct);
+  EXPECT_LT(maxDifference(fast, direct), 2e-6);
+  std::size_t moved = 0;
+  for (float o : fast)
+    moved += o != 0.0f;
+  EXPECT_GT(moved, b.size() / 2);
+  computeOffsets(b, normals, {centre}, 5, 11, Evaluation::fast, 3, {}, fast);
+  computeOffsets(b, normals, {centre}, 5, 11, Evaluation::direct, 3, {}, direct);
+  EXPECT_LT(maxDifference(fast, direct), 2e-6);
+}
+
 TEST(Kernel, ActiveMaskLimitsComputation)
 {
   const Viewpoint origin{0, 0, 0};

@@ -1,0 +1,21 @@
+// The row kernels compiled for AVX-512 (F, VL, DQ, BW) with 512-bit vectors (this file only;
+// chosen at run time when the CPU has them). No Eigen or PCL type crosses this file, so its alignment assumptions cannot leak.
+#include "kernel_math.h"
+#include "kernel_rows.h"
+
+namespace range_nlm
+{
+namespace detail
+{
+namespace avx512
+{
+#include "kernel_rows.inc"
+} // namespace avx512
+
+const RowKernels&
+avx512RowKernels()
+{
+  return avx512::kKernels;
+}
+} // namespace detail
+} // namespace range_nlm
