@@ -14,6 +14,7 @@
 #include <range_nlm/kernel.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <memory>
 
@@ -25,7 +26,10 @@ namespace
 {
 
 constexpr int kTileRows = 32;
-constexpr int kTileCols = 128; // at most; less for very wide search windows
+/// Tile width for patches up to 7 pixels and beyond (a ring of P rows of box sums stays in the
+/// first-level cache); less for very wide search windows.
+constexpr int kTileColsSmallPatch = 128;
+constexpr int kTileColsLargePatch = 64;
 /// Row lengths passed to the row kernels are rounded up to a multiple of this, so that no
 /// scalar remainder loop runs (the extra pixels read padding and write unused sums).
 constexpr int kVectorPad = 16;
@@ -86,13 +90,39 @@ padMap(const PaddedFrame& frame, const float* map, int width, int height, float 
   return out;
 }
 
+/// Zeroed floats whose first one is aligned to a cache line (so are all fields kRowStride apart).
+class AlignedBuffer
+{
+public:
+  explicit AlignedBuffer(std::size_t n) : storage_(n + kVectorPad, 0.0f)
+  {
+    const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(storage_.data());
+    data_ = storage_.data() + ((64 - address % 64) % 64) / sizeof(float);
+    size_ = n;
+  }
+  float* data() { return data_; }
+  float& operator[](std::size_t i) { return data_[i]; }
+  void zero() { std::fill(data_, data_ + size_, 0.0f); }
+
+private:
+  std::vector<float> storage_;
+  float* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
 struct Workspace
 {
-  std::vector<float> prod;        // kChannels x kRowStride: products of one D row
-  std::vector<float> ring;        // P x kRingFields x kRowStride: box-summed D rows
+  explicit Workspace(int patch_size)
+    : prod(kChannels * std::size_t(kRowStride)), ring(std::size_t(patch_size) * kRingFields * kRowStride),
+      rows(patch_size), maps(std::size_t(kTileRows) * kSideFields * kRowStride),
+      sums(std::size_t(kTileRows) * 2 * kRowStride)
+  {
+  }
+  AlignedBuffer prod;             // kChannels x kRowStride: products of one D row
+  AlignedBuffer ring;             // P x kRingFields x kRowStride: box-summed D rows
   std::vector<const float*> rows; // the ring rows of the current vertical window
-  std::vector<float> maps;        // tile rows x kSideFields x kRowStride: staged per-pixel maps
-  std::vector<float> sums;        // tile rows x 2 x kRowStride: num, den
+  AlignedBuffer maps;             // tile rows x kSideFields x kRowStride: staged per-pixel maps
+  AlignedBuffer sums;             // tile rows x 2 x kRowStride: num, den
 };
 
 } // namespace
@@ -115,7 +145,9 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   const int border = r + hp;
   // A row of box sums spans a tile row and r columns each side, rounded up to whole vectors; its
   // products P - 1 more.
-  const int tile_width = std::min(kTileCols, kRowStride - 2 * r - (patch_size - 1) - (kVectorPad - 1));
+  // The staged maps and sums start `lead` columns before the tile (r rounded up to whole vectors).
+  const int lead = roundUp(r);
+  const int tile_width = std::min(patch_size <= 7 ? kTileColsSmallPatch : kTileColsLargePatch, kRowStride - 2 * r - (patch_size - 1) - 2 * kVectorPad);
   if (tile_width < 16) {
     // Search windows of about kRowStride pixels and more: only the literal evaluation.
     computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
@@ -173,21 +205,17 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
-    Workspace ws;
-    ws.prod.resize(kChannels * kRow);
-    ws.ring.resize(static_cast<std::size_t>(patch_size) * slot_floats);
-    ws.rows.resize(patch_size);
-    ws.maps.resize(static_cast<std::size_t>(kTileRows) * kSideFields * kRow);
-    ws.sums.resize(static_cast<std::size_t>(kTileRows) * 2 * kRow);
+    Workspace ws(patch_size);
 #pragma omp for schedule(dynamic, 1)
     for (int tile = 0; tile < tiles; ++tile) {
       const int y0 = (tile / tile_cols) * kTileRows;
       const int y1 = std::min(height, y0 + kTileRows);
       const int x0 = (tile % tile_cols) * tile_width;
       const int x1 = std::min(width, x0 + tile_width);
-      std::fill(ws.sums.begin(), ws.sums.end(), 0.0f);
-      // Staged data of pixel (u, v): v in the tile, u up to r columns beyond it on either side.
-      const auto col = [&](int u) { return static_cast<std::size_t>(u - x0 + r); };
+      ws.sums.zero();
+      // Staged data of pixel (u, v): v in the tile, u up to r columns beyond it on either side;
+      // column x0 starts a cache line.
+      const auto col = [&](int u) { return static_cast<std::size_t>(u - x0 + lead); };
       const auto side = [&](int u, int v) {
         return WeightSide{&ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow + col(u)],
                           &ws.sums[static_cast<std::size_t>(v - y0) * 2 * kRow + col(u)]};
@@ -196,7 +224,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
         // Stage this frame's per-pixel maps of the tile rows.
         for (int v = y0; v < y1; ++v) {
           const std::size_t k = padded_center.index(x0 - r, v);
-          float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow];
+          float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow + col(x0 - r)];
           const std::size_t len = static_cast<std::size_t>(x1 - x0 + 2 * r);
           std::copy_n(&pnx[k], len, out);
           std::copy_n(&pny[k], len, out + kRow);
