@@ -1,10 +1,9 @@
 // Normal estimation over grid neighbourhoods and the edge-preserving pre-smoothing used for it.
 #include "kernel_math.h"
 #include "kernel_rows.h"
+#include "plane_fit.h"
 
 #include <range_nlm/kernel.h>
-
-#include <pcl/common/eigen.h> // pcl::eigen33
 
 #include <cmath>
 #include <limits>
@@ -71,6 +70,8 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   const int r = window / 2;
   const PaddedGrid pad(grid, r, viewpoint);
   const RowKernels& kernels = rowKernels();
+  const PlaneFitKernels& fits = planeFitKernels();
+  const float view[3] = {viewpoint[0], viewpoint[1], viewpoint[2]};
   NormalField normals;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   normals.nx.assign(grid.size(), nan);
@@ -87,16 +88,6 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < height; ++v) {
       std::fill(acc.begin(), acc.end(), 0.0f);
-      const float* cnt = acc.data();
-      const float* sx = cnt + width;
-      const float* sy = sx + width;
-      const float* sz = sy + width;
-      const float* sxx = sz + width;
-      const float* sxy = sxx + width;
-      const float* sxz = sxy + width;
-      const float* syy = sxz + width;
-      const float* syz = syy + width;
-      const float* szz = syz + width;
       const std::size_t row = static_cast<std::size_t>(v) * width;
       for (int u = 0; u < width; ++u) {
         const std::size_t i = row + u;
@@ -115,36 +106,11 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
                           &pad.rho[k0], g.data(), n0x.data(), n0y.data(), n0z.data(), range_gated ? 1.0f : 0.0f,
                           width, acc.data());
         }
-      for (int u = 0; u < width; ++u) {
-        const std::size_t i = row + u;
-        if (!grid.valid[i] || cnt[u] < 2.5f)
-          continue;
-        // The plane normal is the eigenvector of the smallest eigenvalue (PCL's eigen33, as in
-        // pcl::solvePlaneParameters, but in double: with noise close to the pixel spacing the
-        // covariance is nearly isotropic and float rounding would decide the normal).
-        const double inv = 1.0 / cnt[u];
-        const double mx = sx[u] * inv, my = sy[u] * inv, mz = sz[u] * inv;
-        Eigen::Matrix3d cov;
-        cov(0, 0) = sxx[u] * inv - mx * mx;
-        cov(0, 1) = cov(1, 0) = sxy[u] * inv - mx * my;
-        cov(0, 2) = cov(2, 0) = sxz[u] * inv - mx * mz;
-        cov(1, 1) = syy[u] * inv - my * my;
-        cov(1, 2) = cov(2, 1) = syz[u] * inv - my * mz;
-        cov(2, 2) = szz[u] * inv - mz * mz;
-        double eigenvalue = 0.0;
-        Eigen::Vector3d normal;
-        pcl::eigen33(cov, eigenvalue, normal);
-        const double len = normal.norm();
-        if (!std::isfinite(len) || len < 0.5)
-          continue;
-        float nx = float(normal.x() / len), ny = float(normal.y() / len), nz = float(normal.z() / len);
-        const float vx = viewpoint[0] - grid.x[i], vy = viewpoint[1] - grid.y[i], vz = viewpoint[2] - grid.z[i];
-        if (nx * vx + ny * vy + nz * vz < 0.0f)
-          nx = -nx, ny = -ny, nz = -nz;
-        normals.nx[i] = nx;
-        normals.ny[i] = ny;
-        normals.nz[i] = nz;
-      }
+      // The plane normal is the eigenvector of the smallest eigenvalue of the covariance (in
+      // double: with noise close to the pixel spacing the covariance is nearly isotropic and
+      // float rounding would decide the normal), a whole row at once (plane_fit.inc).
+      fits.normals(acc.data(), &pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0], view, width, &normals.nx[row],
+                   &normals.ny[row], &normals.nz[row]);
     }
   }
   return normals;

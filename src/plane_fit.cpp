@@ -1,0 +1,37 @@
+// The baseline plane-fit kernels and the run-time choice between them and the AVX2 ones.
+#include "plane_fit.h"
+
+#include <cmath>
+#include <limits>
+
+namespace range_nlm
+{
+namespace detail
+{
+namespace baseline
+{
+#include "plane_fit.inc"
+} // namespace baseline
+
+const PlaneFitKernels&
+avx2PlaneFitKernels();
+
+const PlaneFitKernels&
+baselinePlaneFitKernels()
+{
+  return baseline::kPlaneFitKernels;
+}
+
+const PlaneFitKernels&
+planeFitKernels()
+{
+#if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX2_KERNELS)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (avx2)
+    return avx2PlaneFitKernels();
+#endif
+  return baseline::kPlaneFitKernels;
+}
+
+} // namespace detail
+} // namespace range_nlm
