@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace range_nlm
 {
@@ -30,54 +31,60 @@ namespace
 {
 /// A grid copied into a padded SoA layout (border r, invalid points flag 0 and coordinates 0)
 /// with the range of every point, so neighbourhood loops run over contiguous rows without
-/// bounds checks and vectorize.
+/// bounds checks and vectorize. Filled by `threads` threads, one padded row at a time (every
+/// element written exactly once, so the buffers need no prior initialisation).
 struct PaddedGrid
 {
   int border, stride;
-  std::vector<float> x, y, z, f, rho;
-  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint) : border(r), stride(g.width + 2 * r)
+  std::unique_ptr<float[]> x, y, z, f, rho;
+  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint, int threads)
+      : border(r), stride(g.width + 2 * r)
   {
-    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * r);
-    x.assign(n, 0.0f), y.assign(n, 0.0f), z.assign(n, 0.0f), f.assign(n, 0.0f), rho.assign(n, 0.0f);
-    for (int v = 0; v < g.height; ++v)
-      for (int u = 0; u < g.width; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * g.width + u;
-        if (!g.valid[i])
+    const int rows = g.height + 2 * r;
+    const std::size_t n = static_cast<std::size_t>(stride) * rows;
+    x.reset(new float[n]), y.reset(new float[n]), z.reset(new float[n]), f.reset(new float[n]);
+    rho.reset(new float[n]);
+    (void)threads;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int pv = 0; pv < rows; ++pv) {
+      const std::size_t k0 = static_cast<std::size_t>(pv) * stride;
+      const int v = pv - r;
+      for (int pu = 0; pu < stride; ++pu) {
+        const int u = pu - r;
+        const std::size_t k = k0 + pu;
+        const bool inside = v >= 0 && v < g.height && u >= 0 && u < g.width;
+        const std::size_t i = inside ? static_cast<std::size_t>(v) * g.width + u : 0;
+        if (!inside || !g.valid[i]) {
+          x[k] = 0.0f, y[k] = 0.0f, z[k] = 0.0f, f[k] = 0.0f, rho[k] = 0.0f;
           continue;
-        const std::size_t k = at(u, v);
+        }
         x[k] = g.x[i], y[k] = g.y[i], z[k] = g.z[i], f[k] = 1.0f;
         const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
         rho[k] = std::sqrt(dx * dx + dy * dy + dz * dz);
       }
+    }
   }
   std::size_t at(int u, int v) const { return static_cast<std::size_t>(v + border) * stride + (u + border); }
 };
-} // namespace
 
+/// One pass of estimateNormalsGated over an already padded grid; `first` is pass 1's result
+/// (pass 2 only).
 NormalField
-estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
-                     const std::vector<float>& gate, int pass)
+fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint& viewpoint, int threads,
+           const std::vector<float>& gate, int pass, const NormalField* first)
 {
-  // Pass 1 (range gate): neighbours whose range differs from p_i's by more than gate[i] are left
-  // out: no fit across a depth edge, but on steep slopes few neighbours remain. Pass 2 (plane
-  // gate): neighbours farther than gate[i] from pass 1's plane through p_i are left out: the
-  // slope is followed and the edge still excluded.
   const bool range_gated = pass == 1;
   const bool plane_gated = pass == 2;
-  const NormalField first =
-      plane_gated ? estimateNormalsGated(grid, window, viewpoint, threads, gate, 1) : NormalField();
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
-  const PaddedGrid pad(grid, r, viewpoint);
   const RowKernels& kernels = rowKernels();
   const PlaneFitKernels& fits = planeFitKernels();
   const float view[3] = {viewpoint[0], viewpoint[1], viewpoint[2]};
+  // Every element is written below (the plane fit covers whole rows).
   NormalField normals;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  normals.nx.assign(grid.size(), nan);
-  normals.ny.assign(grid.size(), nan);
-  normals.nz.assign(grid.size(), nan);
-  threads = detail::resolveThreads(threads);
+  normals.nx.resize(grid.size());
+  normals.ny.resize(grid.size());
+  normals.nz.resize(grid.size());
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
@@ -89,14 +96,15 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
     for (int v = 0; v < height; ++v) {
       std::fill(acc.begin(), acc.end(), 0.0f);
       const std::size_t row = static_cast<std::size_t>(v) * width;
-      for (int u = 0; u < width; ++u) {
-        const std::size_t i = row + u;
-        g[u] = (range_gated || plane_gated) && grid.valid[i] ? gate[i] : 1e30f;
-        const bool has = plane_gated && std::isfinite(first.nx[i]);
-        n0x[u] = has ? first.nx[i] : 0.0f;
-        n0y[u] = has ? first.ny[i] : 0.0f;
-        n0z[u] = has ? first.nz[i] : 0.0f;
-      }
+      if (range_gated || plane_gated)
+        for (int u = 0; u < width; ++u) {
+          const std::size_t i = row + u;
+          g[u] = grid.valid[i] ? gate[i] : 1e30f;
+          const bool has = plane_gated && std::isfinite(first->nx[i]);
+          n0x[u] = has ? first->nx[i] : 0.0f;
+          n0y[u] = has ? first->ny[i] : 0.0f;
+          n0z[u] = has ? first->nz[i] : 0.0f;
+        }
       const std::size_t c0 = pad.at(0, v);
       const RowPointers centre{&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0]};
       for (int dv = -r; dv <= r; ++dv)
@@ -115,6 +123,24 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   }
   return normals;
 }
+} // namespace
+
+NormalField
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass)
+{
+  // Pass 1 (range gate): neighbours whose range differs from p_i's by more than gate[i] are left
+  // out: no fit across a depth edge, but on steep slopes few neighbours remain. Pass 2 (plane
+  // gate): neighbours farther than gate[i] from pass 1's plane through p_i are left out: the
+  // slope is followed and the edge still excluded. Both passes share one padded grid.
+  threads = detail::resolveThreads(threads);
+  const PaddedGrid pad(grid, window / 2, viewpoint, threads);
+  if (pass == 2) {
+    const NormalField first = fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr);
+    return fitNormals(grid, pad, window, viewpoint, threads, gate, 2, &first);
+  }
+  return fitNormals(grid, pad, window, viewpoint, threads, gate, pass, nullptr);
+}
 
 } // namespace detail
 
@@ -130,10 +156,10 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
 {
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
-  const detail::PaddedGrid pad(grid, r, viewpoint);
+  threads = detail::resolveThreads(threads);
+  const detail::PaddedGrid pad(grid, r, viewpoint, threads);
   const detail::RowKernels& kernels = detail::rowKernels();
   Grid out = grid;
-  threads = detail::resolveThreads(threads);
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
