@@ -77,7 +77,6 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
   const bool plane_gated = pass == 2;
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
-  const RowKernels& kernels = rowKernels();
   const PlaneFitKernels& fits = planeFitKernels();
   const float view[3] = {viewpoint[0], viewpoint[1], viewpoint[2]};
   // Every element is written below (the plane fit covers whole rows).
@@ -89,12 +88,11 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
 #pragma omp parallel num_threads(threads)
   {
     // Per row: moments of the neighbourhood relative to p_i (a local origin keeps the float
-    // sums well conditioned), accumulated one neighbour offset at a time over the whole row.
+    // sums well conditioned).
     std::vector<float> acc(10 * static_cast<std::size_t>(width));
     std::vector<float> g(width, 1e30f), n0x(width, 0.0f), n0y(width, 0.0f), n0z(width, 0.0f);
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < height; ++v) {
-      std::fill(acc.begin(), acc.end(), 0.0f);
       const std::size_t row = static_cast<std::size_t>(v) * width;
       if (range_gated || plane_gated)
         for (int u = 0; u < width; ++u) {
@@ -105,15 +103,11 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
           n0y[u] = has ? first->ny[i] : 0.0f;
           n0z[u] = has ? first->nz[i] : 0.0f;
         }
+      // All (2r+1)^2 offsets in one call, in the order the row kernel `moments` would take them,
+      // with the sums of each block of centres kept in registers (plane_fit.inc).
       const std::size_t c0 = pad.at(0, v);
-      const RowPointers centre{&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0]};
-      for (int dv = -r; dv <= r; ++dv)
-        for (int du = -r; du <= r; ++du) {
-          const std::size_t k0 = pad.at(du, v + dv);
-          kernels.moments(centre, &pad.rho[c0], RowPointers{&pad.x[k0], &pad.y[k0], &pad.z[k0], &pad.f[k0]},
-                          &pad.rho[k0], g.data(), n0x.data(), n0y.data(), n0z.data(), range_gated ? 1.0f : 0.0f,
-                          width, acc.data());
-        }
+      fits.window_moments(&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0], &pad.rho[c0], pad.stride, r, g.data(),
+                          n0x.data(), n0y.data(), n0z.data(), range_gated ? 1.0f : 0.0f, width, acc.data());
       // The plane normal is the eigenvector of the smallest eigenvalue of the covariance (in
       // double: with noise close to the pixel spacing the covariance is nearly isotropic and
       // float rounding would decide the normal), a whole row at once (plane_fit.inc).

@@ -29,6 +29,15 @@ struct PlaneFitKernels
   /// or where the solver gives no vector.
   void (*normals)(const float* acc, const float* px, const float* py, const float* pz, const float* flag,
                   const float* view, int width, float* nx, float* ny, float* nz);
+  /// Gated moments of a whole (2r+1) x (2r+1) window for a row of centres: the sums that
+  /// RowKernels::moments accumulates over the offsets (dv, du) = (-r, -r) ... (r, r), in that
+  /// order, into acc[k * width + u] (overwritten), but with the ten sums of a block of centres
+  /// kept in registers over all offsets. x, y, z, f, rho point to the row's first centre in a
+  /// padded SoA grid of row stride `stride` (border >= r on every side); gate, n0x, n0y, n0z and
+  /// range_on as for RowKernels::moments.
+  void (*window_moments)(const float* x, const float* y, const float* z, const float* f, const float* rho,
+                         std::ptrdiff_t stride, int r, const float* gate, const float* n0x, const float* n0y,
+                         const float* n0z, float range_on, int width, float* acc);
 };
 
 /// The fastest plane-fit kernels this CPU supports.

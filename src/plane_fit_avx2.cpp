@@ -3,6 +3,7 @@
 #include "plane_fit.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace range_nlm

@@ -1,5 +1,6 @@
 // The batched smallest-eigenvector solver (src/plane_fit.*) against Eigen's
 // SelfAdjointEigenSolver, and the normals it gives through estimateNormals.
+#include "../src/kernel_rows.h"
 #include "../src/plane_fit.h"
 #include "test_support.h"
 
@@ -364,6 +365,62 @@ TEST(PlaneFit, EstimateNormalsOnPlanesAtAnyScaleAndThreadCount)
           EXPECT_NEAR(one.nx[i], unit.x(), 1e-4) << scale << " " << window << " " << i;
           EXPECT_NEAR(one.ny[i], unit.y(), 1e-4) << scale << " " << window << " " << i;
           EXPECT_NEAR(one.nz[i], unit.z(), 1e-4) << scale << " " << window << " " << i;
+        }
+      }
+  }
+}
+
+TEST(PlaneFit, WindowMomentsMatchTheRowKernelOverAllOffsets)
+{
+  // A padded random grid (holes, depth jumps), gates and pass-1 normals as estimateNormalsGated
+  // passes them: one window_moments call per row against the row kernel `moments` called once
+  // per offset in the same order. Same float operations per lane, so equal up to the rounding of
+  // the contracted (FMA) products.
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int r : {1, 2, 3}) {
+    const int width = 45, height = 9, stride = width + 2 * r; // 45: 5 blocks of 8 and a tail of 5
+    std::vector<float> x(stride * (height + 2 * r), 0.0f), y(x), z(x), f(x), rho(x);
+    for (int v = 0; v < height; ++v)
+      for (int c = 0; c < width; ++c) {
+        const std::size_t k = std::size_t(v + r) * stride + c + r;
+        if (u(rng) < -0.8f)
+          continue; // hole
+        x[k] = 0.01f * c + 0.002f * u(rng), y[k] = 0.01f * v + 0.002f * u(rng);
+        z[k] = 1.0f + (c > 20 ? 0.05f : 0.0f) + 0.003f * u(rng), f[k] = 1.0f;
+        rho[k] = std::sqrt(x[k] * x[k] + y[k] * y[k] + z[k] * z[k]);
+      }
+    std::vector<float> gate(width), n0x(width), n0y(width), n0z(width);
+    for (int pass = 0; pass < 3; ++pass)
+      for (int v = 0; v < height; ++v) {
+        for (int c = 0; c < width; ++c) {
+          gate[c] = pass ? 0.004f + 0.004f * u(rng) : 1e30f;
+          Eigen::Vector3d n(0.1 * u(rng), 0.1 * u(rng), -1.0);
+          n.normalize();
+          n0x[c] = pass == 2 ? float(n.x()) : 0.0f, n0y[c] = pass == 2 ? float(n.y()) : 0.0f;
+          n0z[c] = pass == 2 ? float(n.z()) : 0.0f;
+        }
+        const std::size_t c0 = std::size_t(v + r) * stride + r;
+        std::vector<float> expected(10 * width, 0.0f), got(10 * width, -1.0f);
+        const detail::RowKernels& rows = detail::baselineRowKernels();
+        const detail::RowPointers centre{&x[c0], &y[c0], &z[c0], &f[c0]};
+        for (int dv = -r; dv <= r; ++dv)
+          for (int du = -r; du <= r; ++du) {
+            const std::size_t k0 = c0 + std::ptrdiff_t(dv) * stride + du;
+            rows.moments(centre, &rho[c0], detail::RowPointers{&x[k0], &y[k0], &z[k0], &f[k0]}, &rho[k0],
+                         gate.data(), n0x.data(), n0y.data(), n0z.data(), pass == 1 ? 1.0f : 0.0f, width,
+                         expected.data());
+          }
+        for (const Kernels* kernels : allKernels()) {
+          kernels->window_moments(&x[c0], &y[c0], &z[c0], &f[c0], &rho[c0], stride, r, gate.data(), n0x.data(),
+                                  n0y.data(), n0z.data(), pass == 1 ? 1.0f : 0.0f, width, got.data());
+          for (int k = 0; k < 10; ++k)
+            for (int c = 0; c < width; ++c) {
+              const float e = expected[k * width + c], g = got[k * width + c];
+              // sums of at most 49 terms of magnitude <= 0.1^2: rounding far below 1e-6
+              EXPECT_NEAR(g, e, 1e-6f + 1e-5f * std::fabs(e)) << "r " << r << " pass " << pass << " row " << v
+                                                                << " moment " << k << " centre " << c;
+            }
         }
       }
   }
