@@ -50,8 +50,9 @@ struct PaddedFrame
 
   PaddedFrame(const Grid& g, int border_) : border(border_), stride(g.width + 2 * border_)
   {
-    // kVectorPad floats of slack: rounded-up rows may read past the last padded row.
-    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * border) + kVectorPad;
+    // Slack: rows rounded up to whole vectors may read up to 2 x kVectorPad floats past the last
+    // padded row.
+    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * border) + 4 * kVectorPad;
     x.assign(n, 0.0f);
     y.assign(n, 0.0f);
     z.assign(n, 0.0f);
@@ -98,22 +99,19 @@ public:
   {
     const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(storage_.data());
     data_ = storage_.data() + ((64 - address % 64) % 64) / sizeof(float);
-    size_ = n;
   }
   float* data() { return data_; }
   float& operator[](std::size_t i) { return data_[i]; }
-  void zero() { std::fill(data_, data_ + size_, 0.0f); }
 
 private:
   std::vector<float> storage_;
   float* data_ = nullptr;
-  std::size_t size_ = 0;
 };
 
 struct Workspace
 {
   explicit Workspace(int patch_size)
-    : prod(kChannels * std::size_t(kRowStride)), ring(std::size_t(patch_size) * kRingFields * kRowStride),
+    : prod(kChannels * std::size_t(kRowStride)), ring(std::size_t(patch_size) * (kRingFields * kRowStride + kRingSlack)),
       rows(patch_size), maps(std::size_t(kTileRows) * kSideFields * kRowStride),
       sums(std::size_t(kTileRows) * 2 * kRowStride)
   {
@@ -201,7 +199,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   const int tile_cols = (width + tile_width - 1) / tile_width;
   const int tiles = tile_rows * tile_cols;
   constexpr std::size_t kRow = kRowStride;
-  const std::size_t slot_floats = kRingFields * kRow;
+  const std::size_t slot_floats = kRingFields * kRow + kRingSlack;
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
@@ -212,7 +210,11 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
       const int y1 = std::min(height, y0 + kTileRows);
       const int x0 = (tile % tile_cols) * tile_width;
       const int x1 = std::min(width, x0 + tile_width);
-      ws.sums.zero();
+      // Zero the sums of the columns the tile's rows touch (vectors beyond the tile included).
+      const std::size_t touched = std::min<std::size_t>(kRow, tile_width + 2 * lead + 2 * kVectorPad);
+      for (int v = 0; v < kTileRows; ++v)
+        for (int field = 0; field < 2; ++field)
+          std::fill_n(&ws.sums[(static_cast<std::size_t>(v) * 2 + field) * kRow], touched, 0.0f);
       // Staged data of pixel (u, v): v in the tile, u up to r columns beyond it on either side;
       // column x0 starts a cache line.
       const auto col = [&](int u) { return static_cast<std::size_t>(u - x0 + lead); };
@@ -225,12 +227,22 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
         for (int v = y0; v < y1; ++v) {
           const std::size_t k = padded_center.index(x0 - r, v);
           float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow + col(x0 - r)];
-          const std::size_t len = static_cast<std::size_t>(x1 - x0 + 2 * r);
-          std::copy_n(&pnx[k], len, out);
-          std::copy_n(&pny[k], len, out + kRow);
-          std::copy_n(&pnz[k], len, out + 2 * kRow);
-          std::copy_n(&inv_d2[f][k], len, out + 3 * kRow);
-          std::copy_n(&inv_s2[f][k], len, out + 4 * kRow);
+          const int len = x1 - x0 + 2 * r;
+          const float* d2 = &inv_d2[f][k];
+          const float* s2 = &inv_s2[f][k];
+          for (int q = 0; q < len; ++q) {
+            const float a = pnx[k + q], b = pny[k + q], g = pnz[k + q], is = s2[q];
+            out[q] = a;
+            out[q + kRow] = b;
+            out[q + 2 * kRow] = g;
+            out[q + 3 * kRow] = d2[q];
+            out[q + 4 * kRow] = a * a * is;
+            out[q + 5 * kRow] = 2.0f * a * b * is;
+            out[q + 6 * kRow] = 2.0f * a * g * is;
+            out[q + 7 * kRow] = b * b * is;
+            out[q + 8 * kRow] = 2.0f * b * g * is;
+            out[q + 9 * kRow] = g * g * is;
+          }
         }
         const PaddedFrame& cand = *frame_ptr[f];
         const float psi = frames[f].weight;

@@ -29,12 +29,15 @@ constexpr int kRowStride = 1040;
 /// Fields of a ring row: the kChannels box-summed channels, then the unfiltered D (x, y, z) and
 /// the pair flag of the row's own pixels.
 constexpr int kRingFields = kChannels + 4;
-/// Fields of the staged per-pixel maps of a weight side: nx, ny, nz, 1 / d^2, 1 / s^2.
-constexpr int kSideFields = 5;
+/// Floats after a ring row's last field that box_row may write (its vector tail).
+constexpr int kRingSlack = 64;
+/// Fields of the staged per-pixel maps of a weight side: nx, ny, nz, 1 / d^2 and
+/// (nx^2, 2 nx ny, 2 nx nz, ny^2, 2 ny nz, nz^2) / s^2.
+constexpr int kSideFields = 10;
 
 /// The ring of horizontally box-summed rows whose sum is the vertical box sum: P rows (oldest
-/// last), each kRingFields x kRowStride floats, offset to the first pixel; the middle one is
-/// the row whose weights are formed.
+/// last), each kRingFields x kRowStride floats (plus kRingSlack), offset to the first pixel; the
+/// middle one is the row whose weights are formed.
 struct BoxRows
 {
   const float* const* rows;
@@ -52,13 +55,14 @@ struct WeightSide
 struct RowKernels
 {
   /// Products D D^T (and the pair flag) for `n + patch - 1` pixels of centre row c and candidate
-  /// row k (both offset to the first pixel; prod holds kChannels x kRowStride floats), then their
+  /// row k, rounded up to 16 (both offset to the first pixel, with that much readable slack;
+  /// prod holds kChannels x kRowStride floats), then their
   /// horizontal box sums over `patch` pixels into the first kChannels fields of the ring row
   /// `out`, and the unfiltered D and flag of the n middle pixels into its last 4 fields.
   void (*box_row)(RowPointers c, RowPointers k, int n, int patch, float* prod, float* out);
   /// For n pixels u of one shift delta: M = the vertical box sum of `box`, D and flag m from its
   /// middle row, Sim = n^T M n / pairs, and per side
-  ///   w = psi m exp(-(|D|^2 inv_d2 + Sim inv_s2)), num += w h, den += w
+  ///   w = psi m exp(-(|D|^2 / d^2 + Sim / s^2)), num += w h, den += w
   /// with h = n . D for side a (the pixels of the D row, candidates p + delta) and h = -n . D for
   /// side b (the candidate pixels, whose candidates p - delta give the same D D^T). a or b may
   /// be null.
