@@ -48,7 +48,7 @@ struct PaddedFrame
   int stride = 0; // padded width
   std::vector<float> x, y, z, f;
 
-  PaddedFrame(const Grid& g, int border_) : border(border_), stride(g.width + 2 * border_)
+  PaddedFrame(const Grid& g, int border_, int threads) : border(border_), stride(g.width + 2 * border_)
   {
     // Slack: rows rounded up to whole vectors may read up to 2 x kVectorPad floats past the last
     // padded row.
@@ -57,6 +57,8 @@ struct PaddedFrame
     y.assign(n, 0.0f);
     z.assign(n, 0.0f);
     f.assign(n, 0.0f);
+    (void)threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (int v = 0; v < g.height; ++v)
       for (int u = 0; u < g.width; ++u) {
         const int i = v * g.width + u;
@@ -79,17 +81,6 @@ struct PaddedFrame
     return RowPointers{&x[k], &y[k], &z[k], &f[k]};
   }
 };
-
-/// A per-pixel map in the padded layout of `frame`, `outside` in the border.
-std::vector<float>
-padMap(const PaddedFrame& frame, const float* map, int width, int height, float outside)
-{
-  std::vector<float> out(frame.x.size(), outside);
-  for (int v = 0; v < height; ++v)
-    std::copy(map + static_cast<std::size_t>(v) * width, map + static_cast<std::size_t>(v + 1) * width,
-              &out[frame.index(0, v)]);
-  return out;
-}
 
 /// Zeroed floats whose first one is aligned to a cache line (so are all fields kRowStride apart).
 class AlignedBuffer
@@ -153,7 +144,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   }
   const RowKernels& kernels = rowKernels();
 
-  const PaddedFrame padded_center(center, border);
+  const PaddedFrame padded_center(center, border, threads);
   // The centre frame's own term reuses padded_center; other frames get their own copy.
   std::vector<std::unique_ptr<PaddedFrame>> padded(frames.size());
   std::vector<const PaddedFrame*> frame_ptr(frames.size());
@@ -161,7 +152,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
     if (frames[f].grid == &center) {
       frame_ptr[f] = &padded_center;
     } else {
-      padded[f] = std::make_unique<PaddedFrame>(*frames[f].grid, border);
+      padded[f] = std::make_unique<PaddedFrame>(*frames[f].grid, border, threads);
       frame_ptr[f] = padded[f].get();
     }
   }
@@ -171,6 +162,7 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   const std::size_t n = center.size();
   std::vector<unsigned char> act(n);
   std::vector<float> nx(n), ny(n), nz(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (std::size_t i = 0; i < n; ++i) {
     const bool ok = center.valid[i] && (active.empty() || active[i]) && std::isfinite(normals.nx[i]) &&
                     std::isfinite(normals.ny[i]) && std::isfinite(normals.nz[i]);
@@ -179,20 +171,11 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
     ny[i] = ok ? normals.ny[i] : 0.0f;
     nz[i] = ok ? normals.nz[i] : 0.0f;
   }
-  const std::vector<float> pnx = padMap(padded_center, nx.data(), width, height, 0.0f);
-  const std::vector<float> pny = padMap(padded_center, ny.data(), width, height, 0.0f);
-  const std::vector<float> pnz = padMap(padded_center, nz.data(), width, height, 0.0f);
-
-  // 1 / d^2 and 1 / s^2 per centre point and frame, padded (constant for scalar bandwidths).
-  std::vector<std::vector<float>> inv_d2(frames.size()), inv_s2(frames.size());
+  // 1 / d^2 and 1 / s^2 per centre point and frame: the frame's map, or its scalar bandwidth.
+  std::vector<float> const_d2(frames.size()), const_s2(frames.size());
   for (std::size_t f = 0; f < frames.size(); ++f) {
-    const std::size_t size = padded_center.x.size();
-    inv_d2[f] = frames[f].inverse_distance2
-                    ? padMap(padded_center, frames[f].inverse_distance2->data(), width, height, 0.0f)
-                    : std::vector<float>(size, inverseSquare(frames[f].distance_bandwidth));
-    inv_s2[f] = frames[f].inverse_similarity2
-                    ? padMap(padded_center, frames[f].inverse_similarity2->data(), width, height, 0.0f)
-                    : std::vector<float>(size, inverseSquare(frames[f].similarity_bandwidth));
+    const_d2[f] = inverseSquare(frames[f].distance_bandwidth);
+    const_s2[f] = inverseSquare(frames[f].similarity_bandwidth);
   }
 
   const int tile_rows = (height + kTileRows - 1) / kTileRows;
@@ -223,19 +206,25 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
                           &ws.sums[static_cast<std::size_t>(v - y0) * 2 * kRow + col(u)]};
       };
       for (std::size_t f = 0; f < frames.size(); ++f) {
-        // Stage this frame's per-pixel maps of the tile rows.
+        // Stage this frame's per-pixel maps of the tile rows (zero outside the image).
+        const std::vector<float>* map_d2 = frames[f].inverse_distance2;
+        const std::vector<float>* map_s2 = frames[f].inverse_similarity2;
         for (int v = y0; v < y1; ++v) {
-          const std::size_t k = padded_center.index(x0 - r, v);
-          float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow + col(x0 - r)];
-          const int len = x1 - x0 + 2 * r;
-          const float* d2 = &inv_d2[f][k];
-          const float* s2 = &inv_s2[f][k];
-          for (int q = 0; q < len; ++q) {
-            const float a = pnx[k + q], b = pny[k + q], g = pnz[k + q], is = s2[q];
+          float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow];
+          for (int u = x0 - r; u < x1 + r; ++u) {
+            const std::size_t q = col(u);
+            if (u < 0 || u >= width) {
+              for (int field = 0; field < kSideFields; ++field)
+                out[q + field * kRow] = 0.0f;
+              continue;
+            }
+            const std::size_t i = static_cast<std::size_t>(v) * width + u;
+            const float a = nx[i], b = ny[i], g = nz[i];
+            const float is = map_s2 ? (*map_s2)[i] : const_s2[f];
             out[q] = a;
             out[q + kRow] = b;
             out[q + 2 * kRow] = g;
-            out[q + 3 * kRow] = d2[q];
+            out[q + 3 * kRow] = map_d2 ? (*map_d2)[i] : const_d2[f];
             out[q + 4 * kRow] = a * a * is;
             out[q + 5 * kRow] = 2.0f * a * b * is;
             out[q + 6 * kRow] = 2.0f * a * g * is;
