@@ -70,7 +70,9 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
              Displacement displacement, const Viewpoint& viewpoint, const std::vector<float>& limit,
              float min_cos)
 {
-  for (std::size_t i = 0; i < grid.size(); ++i) {
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(grid.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
     float h = offsets[i];
     if (!limit.empty())
       h = std::clamp(h, -limit[i], limit[i]);
@@ -166,7 +168,9 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   // Range of every centre point (the per-point bandwidths are functions of it).
   auto rangesOf = [&](const Grid& g) {
     std::vector<float> rho(g.size(), 0.0f);
-    for (std::size_t i = 0; i < g.size(); ++i)
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(g.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::ptrdiff_t i = 0; i < size; ++i)
       if (g.valid[i]) {
         const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
         rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
@@ -202,8 +206,9 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     }
   };
 
-  // Neighbour frames are estimated once, from their own data.
-  const float input_rho_median = medianRange(input, rangesOf(input));
+  // Neighbour frames are estimated once, from their own data (the range-adaptive model reads
+  // their profiles at the centre frame's median range).
+  const float input_rho_median = adaptive && count > 1 ? medianRange(input, rangesOf(input)) : 0.0f;
   for (int k = 0; k < count; ++k) {
     if (k == center)
       continue;
@@ -218,7 +223,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   std::vector<std::vector<float>> inverse_d2(count), inverse_s2(count);
   for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
     const Grid& current = run.output;
-    const std::vector<float> rho = rangesOf(current);
+    const std::vector<float> rho = adaptive ? rangesOf(current) : std::vector<float>();
     NormalField normals;
     if (adaptive) {
       estimateFrame(center, current, nullptr, medianRange(current, rho));
@@ -230,6 +235,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       std::vector<float> gate;
       if (parameters.normal_edge_gate > 0.0f) {
         gate.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
         for (std::size_t i = 0; i < n; ++i)
           gate[i] = parameters.normal_edge_gate * sig[i] / parameters.similarity_scale;
       }
@@ -237,11 +243,14 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     };
     // Local noise sigma of every centre point: for the pre-smoothing and the displacement limit.
     std::vector<float> sigma(n, bandwidths[center].similarity);
-    if (adaptive)
+    if (adaptive) {
+#pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         sigma[i] = current.valid[i] ? parameters.similarity_scale * profiles[center].sigmaAt(rho[i]) : 0.0f;
+    }
     if (parameters.normal_presmooth_window > 1) {
       std::vector<float> range_sigma(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
       const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
@@ -266,12 +275,14 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
         // given by the user stays global.
         if (!(parameters.distance_bandwidth > 0.0f)) {
           inverse_d2[k].resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
           for (std::size_t i = 0; i < n; ++i)
             inverse_d2[k][i] = detail::inverseSquare(parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i]);
           term.inverse_distance2 = &inverse_d2[k];
         }
         if (!(parameters.similarity_bandwidth > 0.0f)) {
           inverse_s2[k].resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
           for (std::size_t i = 0; i < n; ++i)
             inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * profiles[k].sigmaAt(rho[i]));
           term.inverse_similarity2 = &inverse_s2[k];
@@ -288,6 +299,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     std::vector<float> limit;
     if (parameters.max_displacement > 0.0f) {
       limit.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         limit[i] = parameters.max_displacement * sigma[i];
     }
