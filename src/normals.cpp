@@ -47,20 +47,37 @@ struct PaddedGrid
     (void)threads;
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int pv = 0; pv < rows; ++pv) {
-      const std::size_t k0 = static_cast<std::size_t>(pv) * stride;
+      float* __restrict px = &x[static_cast<std::size_t>(pv) * stride];
+      float* __restrict py = &y[static_cast<std::size_t>(pv) * stride];
+      float* __restrict pz = &z[static_cast<std::size_t>(pv) * stride];
+      float* __restrict pf = &f[static_cast<std::size_t>(pv) * stride];
+      float* __restrict pr = &rho[static_cast<std::size_t>(pv) * stride];
       const int v = pv - r;
-      for (int pu = 0; pu < stride; ++pu) {
-        const int u = pu - r;
-        const std::size_t k = k0 + pu;
-        const bool inside = v >= 0 && v < g.height && u >= 0 && u < g.width;
-        const std::size_t i = inside ? static_cast<std::size_t>(v) * g.width + u : 0;
-        if (!inside || !g.valid[i]) {
-          x[k] = 0.0f, y[k] = 0.0f, z[k] = 0.0f, f[k] = 0.0f, rho[k] = 0.0f;
-          continue;
-        }
-        x[k] = g.x[i], y[k] = g.y[i], z[k] = g.z[i], f[k] = 1.0f;
-        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
-        rho[k] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const bool inside = v >= 0 && v < g.height;
+      // Border rows and columns are 0.
+      const int width = g.width;
+      const int left = inside ? r : stride; // zero [0, left) and [right, stride)
+      const int right = inside ? r + width : stride;
+      for (int pu = 0; pu < left; ++pu)
+        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f, pr[pu] = 0.0f;
+      for (int pu = right; pu < stride; ++pu)
+        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f, pr[pu] = 0.0f;
+      if (!inside)
+        continue;
+      // Interior, branch-free (invalid points hold NaN, replaced by 0).
+      const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
+      const float* __restrict gx = &g.x[i0];
+      const float* __restrict gy = &g.y[i0];
+      const float* __restrict gz = &g.z[i0];
+      const unsigned char* __restrict gv = &g.valid[i0];
+      const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+#pragma omp simd
+      for (int u = 0; u < width; ++u) {
+        const bool ok = static_cast<float>(gv[u]) > 0.0f; // (a float compare vectorizes)
+        const float dx = gx[u] - vx, dy = gy[u] - vy, dz = gz[u] - vz;
+        const float range = std::sqrt(dx * dx + dy * dy + dz * dz);
+        px[r + u] = ok ? gx[u] : 0.0f, py[r + u] = ok ? gy[u] : 0.0f, pz[r + u] = ok ? gz[u] : 0.0f;
+        pf[r + u] = ok ? 1.0f : 0.0f, pr[r + u] = ok ? range : 0.0f;
       }
     }
   }
