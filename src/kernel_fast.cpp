@@ -99,19 +99,22 @@ private:
   float* data_ = nullptr;
 };
 
+/// Weight sums per pixel: the current frame's sum of w h / s, the sum of w, the sum of w h.
+constexpr int kSumFields = 3;
+
 struct Workspace
 {
   explicit Workspace(int patch_size)
     : prod(kChannels * std::size_t(kRowStride)), ring(std::size_t(patch_size) * (kRingFields * kRowStride + kRingSlack)),
       rows(patch_size), maps(std::size_t(kTileRows) * kSideFields * kRowStride),
-      sums(std::size_t(kTileRows) * 2 * kRowStride)
+      sums(std::size_t(kTileRows) * kSumFields * kRowStride)
   {
   }
   AlignedBuffer prod;             // kChannels x kRowStride: products of one D row
   AlignedBuffer ring;             // P x kRingFields x kRowStride: box-summed D rows
   std::vector<const float*> rows; // the ring rows of the current vertical window
   AlignedBuffer maps;             // tile rows x kSideFields x kRowStride: staged per-pixel maps
-  AlignedBuffer sums;             // tile rows x 2 x kRowStride: num, den
+  AlignedBuffer sums;             // tile rows x kSumFields x kRowStride: num / s of a frame, den, num
 };
 
 } // namespace
@@ -177,6 +180,12 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
     const_d2[f] = inverseSquare(frames[f].distance_bandwidth);
     const_s2[f] = inverseSquare(frames[f].similarity_bandwidth);
   }
+  // 1 / s^2 of point i in frame f, bounded below so that s stays finite (s = 1e15 m is no
+  // weight at all either way).
+  const auto inverseSimilarity = [&](std::size_t f, std::size_t i) {
+    const float v = frames[f].inverse_similarity2 ? (*frames[f].inverse_similarity2)[i] : const_s2[f];
+    return v > 1e-30f ? v : 1e-30f;
+  };
 
   const int tile_rows = (height + kTileRows - 1) / kTileRows;
   const int tile_cols = (width + tile_width - 1) / tile_width;
@@ -196,19 +205,18 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
       // Zero the sums of the columns the tile's rows touch (vectors beyond the tile included).
       const std::size_t touched = std::min<std::size_t>(kRow, tile_width + 2 * lead + 2 * kVectorPad);
       for (int v = 0; v < kTileRows; ++v)
-        for (int field = 0; field < 2; ++field)
-          std::fill_n(&ws.sums[(static_cast<std::size_t>(v) * 2 + field) * kRow], touched, 0.0f);
+        for (int field = 0; field < kSumFields; ++field)
+          std::fill_n(&ws.sums[(static_cast<std::size_t>(v) * kSumFields + field) * kRow], touched, 0.0f);
       // Staged data of pixel (u, v): v in the tile, u up to r columns beyond it on either side;
       // column x0 starts a cache line.
       const auto col = [&](int u) { return static_cast<std::size_t>(u - x0 + lead); };
       const auto side = [&](int u, int v) {
         return WeightSide{&ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow + col(u)],
-                          &ws.sums[static_cast<std::size_t>(v - y0) * 2 * kRow + col(u)]};
+                          &ws.sums[static_cast<std::size_t>(v - y0) * kSumFields * kRow + col(u)]};
       };
       for (std::size_t f = 0; f < frames.size(); ++f) {
         // Stage this frame's per-pixel maps of the tile rows (zero outside the image).
         const std::vector<float>* map_d2 = frames[f].inverse_distance2;
-        const std::vector<float>* map_s2 = frames[f].inverse_similarity2;
         for (int v = y0; v < y1; ++v) {
           float* out = &ws.maps[static_cast<std::size_t>(v - y0) * kSideFields * kRow];
           for (int u = x0 - r; u < x1 + r; ++u) {
@@ -219,18 +227,11 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
               continue;
             }
             const std::size_t i = static_cast<std::size_t>(v) * width + u;
-            const float a = nx[i], b = ny[i], g = nz[i];
-            const float is = map_s2 ? (*map_s2)[i] : const_s2[f];
-            out[q] = a;
-            out[q + kRow] = b;
-            out[q + 2 * kRow] = g;
+            const float scale = std::sqrt(inverseSimilarity(f, i));
+            out[q] = nx[i] * scale;
+            out[q + kRow] = ny[i] * scale;
+            out[q + 2 * kRow] = nz[i] * scale;
             out[q + 3 * kRow] = map_d2 ? (*map_d2)[i] : const_d2[f];
-            out[q + 4 * kRow] = a * a * is;
-            out[q + 5 * kRow] = 2.0f * a * b * is;
-            out[q + 6 * kRow] = 2.0f * a * g * is;
-            out[q + 7 * kRow] = b * b * is;
-            out[q + 8 * kRow] = 2.0f * b * g * is;
-            out[q + 9 * kRow] = g * g * is;
           }
         }
         const PaddedFrame& cand = *frame_ptr[f];
@@ -274,12 +275,19 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
             }
           }
         }
+        // num += s (sum of w h / s) for this frame's s, then the frame's sum starts again.
+        for (int v = y0; v < y1; ++v)
+          for (int u = x0; u < x1; ++u) {
+            float* sum = side(u, v).sums;
+            sum[2 * kRow] += sum[0] / std::sqrt(inverseSimilarity(f, static_cast<std::size_t>(v) * width + u));
+            sum[0] = 0.0f;
+          }
       }
       for (int v = y0; v < y1; ++v)
         for (int u = x0; u < x1; ++u) {
           const std::size_t i = static_cast<std::size_t>(v) * width + u;
           const WeightSide s = side(u, v);
-          offsets[i] = (act[i] && s.sums[kRow] > 0.0f) ? s.sums[0] / s.sums[kRow] : 0.0f;
+          offsets[i] = (act[i] && s.sums[kRow] > 0.0f) ? s.sums[2 * kRow] / s.sums[kRow] : 0.0f;
         }
     }
   }

@@ -31,9 +31,8 @@ constexpr int kRowStride = 1040;
 constexpr int kRingFields = kChannels + 4;
 /// Floats after a ring row's last field that box_row may write (its vector tail).
 constexpr int kRingSlack = 64;
-/// Fields of the staged per-pixel maps of a weight side: nx, ny, nz, 1 / d^2 and
-/// (nx^2, 2 nx ny, 2 nx nz, ny^2, 2 ny nz, nz^2) / s^2.
-constexpr int kSideFields = 10;
+/// Fields of the staged per-pixel maps of a weight side: (nx, ny, nz) / s and 1 / d^2.
+constexpr int kSideFields = 4;
 
 /// The ring of horizontally box-summed rows whose sum is the vertical box sum: P rows (oldest
 /// last), each kRingFields x kRowStride floats (plus kRingSlack), offset to the first pixel; the
@@ -45,7 +44,7 @@ struct BoxRows
 };
 
 /// The output pixels one side of a shift updates: their staged maps (kSideFields fields) and
-/// weight sums (num, then den, kRowStride apart), offset to the first pixel.
+/// weight sums (num / s, then den, kRowStride apart), offset to the first pixel.
 struct WeightSide
 {
   const float* maps;
@@ -62,7 +61,7 @@ struct RowKernels
   void (*box_row)(RowPointers c, RowPointers k, int n, int patch, float* prod, float* out);
   /// For n pixels u of one shift delta: M = the vertical box sum of `box`, D and flag m from its
   /// middle row, Sim = n^T M n / pairs, and per side
-  ///   w = psi m exp(-(|D|^2 / d^2 + Sim / s^2)), num += w h, den += w
+  ///   w = psi m exp(-(|D|^2 / d^2 + Sim / s^2)), num += w h / s, den += w
   /// with h = n . D for side a (the pixels of the D row, candidates p + delta) and h = -n . D for
   /// side b (the candidate pixels, whose candidates p - delta give the same D D^T). a or b may
   /// be null.
