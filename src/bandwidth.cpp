@@ -13,11 +13,14 @@ Bandwidths
 estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
                    std::uint64_t seed)
 {
-  std::vector<int> candidates;
-  candidates.reserve(grid.size());
-  for (std::size_t i = 0; i < grid.size(); ++i)
-    if (grid.valid[i] && std::isfinite(normals.nx[i]))
-      candidates.push_back(static_cast<int>(i));
+  // Valid points with a normal, in index order (written branch-free, then trimmed).
+  std::vector<int> candidates(grid.size());
+  std::size_t count_candidates = 0;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    candidates[count_candidates] = static_cast<int>(i);
+    count_candidates += (grid.valid[i] && std::isfinite(normals.nx[i])) ? 1 : 0;
+  }
+  candidates.resize(count_candidates);
   if (candidates.empty())
     throw std::invalid_argument("range_nlm: the cloud has no valid point with a normal; nothing to "
                                 "estimate the bandwidths from (all points NaN?)");

@@ -46,6 +46,7 @@ Grid::updateValidity()
   const std::size_t n = size();
   valid.resize(n);
   const float nan = std::numeric_limits<float>::quiet_NaN();
+#pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     const bool ok = std::isfinite(x[i]) && std::isfinite(y[i]) && std::isfinite(z[i]);
     valid[i] = ok ? 1 : 0;

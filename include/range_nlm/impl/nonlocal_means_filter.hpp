@@ -2,7 +2,9 @@
 
 #include <range_nlm/nonlocal_means_filter.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,17 +24,22 @@ toGrid(const pcl::PointCloud<PointT>& cloud, const char* what)
     throw std::invalid_argument(msg.str());
   }
   Grid grid(static_cast<int>(cloud.width), static_cast<int>(cloud.height));
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(cloud.size());
+  std::ptrdiff_t first_infinite = n;
+#pragma omp parallel for schedule(static) reduction(min : first_infinite)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
     const PointT& p = cloud[i];
-    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z)) {
-      std::ostringstream msg;
-      msg << "range_nlm: the " << what << " has an infinite coordinate at pixel (" << i % cloud.width
-          << ", " << i / cloud.width << "); invalid points must be NaN";
-      throw std::invalid_argument(msg.str());
-    }
+    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
+      first_infinite = std::min(first_infinite, i);
     grid.x[i] = p.x;
     grid.y[i] = p.y;
     grid.z[i] = p.z;
+  }
+  if (first_infinite < n) {
+    std::ostringstream msg;
+    msg << "range_nlm: the " << what << " has an infinite coordinate at pixel (" << first_infinite % cloud.width
+        << ", " << first_infinite / cloud.width << "); invalid points must be NaN";
+    throw std::invalid_argument(msg.str());
   }
   grid.updateValidity();
   return grid;
@@ -45,7 +52,9 @@ fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud
   if (&output != &input)
     output = input;
   bool dense = true;
-  for (std::size_t i = 0; i < output.size(); ++i) {
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(output.size());
+#pragma omp parallel for schedule(static) reduction(&& : dense)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
     PointT& p = output[i];
     p.x = grid.x[i];
     p.y = grid.y[i];
