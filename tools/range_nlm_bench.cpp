@@ -101,6 +101,7 @@ struct Settings
   int runs = 5;
   int threads = 1;
   bool all = false;
+  bool no_direct = false;
   bool breakdown = false;
   int sequence_memory = 0;
   int sequence_search = kTemporalSearch;
@@ -352,9 +353,10 @@ benchStatic(const Settings& s, const Frames& frames)
   rows.push_back(
       measure(s, "range_nlm fast", frames, s.runs, true, describe(s) + "; Evaluation::fast",
               prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast))));
-  rows.push_back(
-      measure(s, "range_nlm direct", frames, s.runs, true, describe(s) + "; Evaluation::direct",
-              prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::direct))));
+  if (!s.no_direct)
+    rows.push_back(
+        measure(s, "range_nlm direct", frames, s.runs, true, describe(s) + "; Evaluation::direct",
+                prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::direct))));
   rows.push_back(measure(s, "pcl FastBilateralFilterOMP", frames, s.runs, true,
                          "sigma_s 5, sigma_r 0.03; fills NaN pixels with a finite z (PCL #1027)",
                          prepareBilateral(cloud, s.threads)));
@@ -374,7 +376,9 @@ benchTemporal(const Settings& s, const Frames& frames)
       measure(s, "range_nlm temporal fast", frames, s.runs, true,
               "TemporalNonLocalMeansFilter, centre of 3 frames; " + describe(s) + "; Evaluation::fast",
               prepareTemporal(frames, fast)));
-  if (s.all)
+  if (s.no_direct) {
+    // the reference path is left out (--no-direct)
+  } else if (s.all)
     rows.push_back(measure(s, "range_nlm temporal direct", frames, s.runs, true,
                            "TemporalNonLocalMeansFilter; " + describe(s) + "; Evaluation::direct",
                            prepareTemporal(frames, direct)));
@@ -1126,6 +1130,7 @@ run(int argc, char** argv)
     ("runs", po::value<int>()->default_value(5), "timed runs per method after one warm-up run; the median is reported")
     ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
     ("all", "also give the temporal direct path a warm-up and --runs runs (default: timed once, it is very slow)")
+    ("no-direct", "leave out the direct (reference) evaluation, which takes minutes in the temporal configuration")
     ("breakdown", "time the kernel phases (normals, pre-smoothing, bandwidths, offsets) of each configuration")
     ("sequence-memory", po::value<int>()->default_value(0),
      "N > 0: run TemporalStream (radius 1) over N noisy copies of --input and report its peak memory; 0 = off")
@@ -1211,6 +1216,9 @@ run(int argc, char** argv)
   s.runs = vm["runs"].as<int>();
   const int threads = vm["threads"].as<int>();
   s.all = vm.count("all") > 0;
+  s.no_direct = vm.count("no-direct") > 0;
+  if (s.all && s.no_direct)
+    throw UsageError("--all and --no-direct contradict each other (--all times the direct path more often)");
   s.breakdown = vm.count("breakdown") > 0;
   s.sequence_memory = vm["sequence-memory"].as<int>();
   s.sequence_search = vm["sequence-search"].as<int>();
@@ -1294,7 +1302,7 @@ run(int argc, char** argv)
           temporal
               ? benchBreakdown(s, f, parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast),
                                false)
-              : benchBreakdown(s, f, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast), true));
+              : benchBreakdown(s, f, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast), !s.no_direct));
     }
   std::unique_ptr<SequenceMemory> sequence;
   if (s.sequence_memory > 0)
