@@ -9,6 +9,9 @@ using namespace range_nlm;
 
 TEST(BenchTool, NoDirectTimesTheFastPathAndThePeersOnly)
 {
+  if (test::kAddressSanitizer)
+    GTEST_SKIP() << "under AddressSanitizer Eigen's aligned allocator differs between this build and "
+                    "Debian's PCL, so the cloud pcl::MovingLeastSquares resizes cannot be freed here";
   const test::CommandResult r =
       test::runTool("range_nlm_bench", "--config static --preset paper --runs 1 --no-direct --json");
   ASSERT_EQ(r.status, 0) << r.output;

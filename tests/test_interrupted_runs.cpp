@@ -29,18 +29,6 @@ using namespace range_nlm;
 
 namespace
 {
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
-
 const std::string kTool = std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_denoise";
 
 struct Result
@@ -151,7 +139,7 @@ expectSameOutputs(const fs::path& out, const fs::path& reference)
 class InterruptedRuns : public ::testing::Test
 {
 protected:
-  static constexpr int kFrames = 40, kWidth = kSanitized ? 64 : 160, kHeight = kSanitized ? 48 : 120;
+  static constexpr int kFrames = 40, kWidth = test::kAddressSanitizer ? 64 : 160, kHeight = test::kAddressSanitizer ? 48 : 120;
   static constexpr int kShortFrames = 16;
   static void SetUpTestSuite()
   {

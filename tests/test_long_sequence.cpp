@@ -21,27 +21,15 @@ using namespace range_nlm;
 
 namespace
 {
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-
 /// The two sequence lengths compared. Under AddressSanitizer, which slows the filter down about
 /// tenfold, the sequences are shorter; the growth they would show if frames were kept is still
 /// far above the bound.
-constexpr int kShortFrames = kAddressSanitizer ? 40 : 100;
-constexpr int kLongFrames = kAddressSanitizer ? 120 : 300;
+constexpr int kShortFrames = test::kAddressSanitizer ? 40 : 100;
+constexpr int kLongFrames = test::kAddressSanitizer ? 120 : 300;
 /// Peak resident memory of one run, in KiB. Measured for 64 x 48 frames with --temporal-radius 1:
 /// 28 MiB in a Release build (of which the frames held are a few hundred KiB, the rest is code and
 /// PCL's libraries), 105 MiB with AddressSanitizer (shadow memory, allocator) and a 1 MiB quarantine.
-constexpr long kPeakBoundKiB = kAddressSanitizer ? 192 * 1024 : 48 * 1024;
+constexpr long kPeakBoundKiB = test::kAddressSanitizer ? 192 * 1024 : 48 * 1024;
 /// Allowed difference between the short and the long sequence. Were frames kept, 80 more frames
 /// of 64 x 48 would add over 6 MiB (a 36 KiB input blob plus a 48 KiB PointXYZ cloud each, at
 /// least), 200 more over 16 MiB.
@@ -68,7 +56,7 @@ runMeasured(const std::vector<std::string>& args)
     const int fd = ::open("/dev/null", O_WRONLY);
     ::dup2(fd, 1);
     ::dup2(fd, 2);
-    if (kAddressSanitizer) // freed memory must not pile up in the quarantine during this test
+    if (test::kAddressSanitizer) // freed memory must not pile up in the quarantine during this test
       ::setenv("ASAN_OPTIONS", "quarantine_size_mb=1:detect_leaks=0", 1);
     ::execv(argv[0], argv.data());
     ::_exit(127);
