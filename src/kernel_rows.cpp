@@ -24,19 +24,39 @@ baselineRowKernels()
   return baseline::kKernels;
 }
 
+bool
+cpuRunsAvx512()
+{
+#if defined(__x86_64__)
+  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+                             std::getenv("RANGE_NLM_NO_AVX512") == nullptr;
+  return avx512;
+#else
+  return false;
+#endif
+}
+
+bool
+cpuRunsAvx2()
+{
+#if defined(__x86_64__)
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return avx2;
+#else
+  return false;
+#endif
+}
+
 const RowKernels&
 rowKernels()
 {
 #if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX512_KERNELS)
-  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-                             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
-                             std::getenv("RANGE_NLM_NO_AVX512") == nullptr;
-  if (avx512)
+  if (cpuRunsAvx512())
     return avx512RowKernels();
 #endif
 #if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX2_KERNELS)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  if (avx2)
+  if (cpuRunsAvx2())
     return avx2RowKernels();
 #endif
   return baseline::kKernels;

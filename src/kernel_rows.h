@@ -77,6 +77,14 @@ struct RowKernels
                     float* num, float* den);
 };
 
+/// Whether this CPU runs the AVX-512 (F, VL, DQ, BW) kernels; RANGE_NLM_NO_AVX512 in the
+/// environment turns them off (for comparisons).
+bool
+cpuRunsAvx512();
+/// Whether this CPU runs the AVX2 + FMA kernels.
+bool
+cpuRunsAvx2();
+
 /// The fastest kernels this CPU supports.
 const RowKernels&
 rowKernels();

@@ -1,8 +1,8 @@
 // The baseline plane-fit kernels and the run-time choice between them and the AVX2 / AVX-512 ones.
 #include "plane_fit.h"
+#include "kernel_rows.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -30,15 +30,11 @@ const PlaneFitKernels&
 planeFitKernels()
 {
 #if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX512_KERNELS)
-  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-                             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
-                             std::getenv("RANGE_NLM_NO_AVX512") == nullptr;
-  if (avx512)
+  if (cpuRunsAvx512())
     return avx512PlaneFitKernels();
 #endif
 #if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX2_KERNELS)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  if (avx2)
+  if (cpuRunsAvx2())
     return avx2PlaneFitKernels();
 #endif
   return baseline::kPlaneFitKernels;
