@@ -16,6 +16,7 @@
 // set, and it writes the decoded cloud as an ascii PCD whose "# range_nlm recipe" comment line
 // holds the parameters; tests/test_bad_input.cpp filters every tests/data/fuzz-*.pcd that way and
 // runs range_nlm_denoise on every tests/data/fuzz-* file.
+#include "fuzz_contract.h"
 #include "tool_common.h"
 
 #include <range_nlm/nonlocal_means_filter.h>
@@ -39,6 +40,7 @@
 
 namespace
 {
+using range_nlm::fuzz::tooSparseForNoiseEstimate;
 using range_nlm::tools::InputError;
 
 [[noreturn]] void
@@ -85,33 +87,6 @@ readAsFile(const std::uint8_t* data, std::size_t size)
     if (message.empty() || message.find('\n') != std::string::npos || message.find(path) == std::string::npos)
       bug("InputError message is not one line naming the file: " + message);
   }
-}
-
-/// Under 5% of the valid points have 3 valid neighbours in their 3 x 3 window: the noise estimate
-/// (from 1000 random valid points, see estimateNoiseProfile) may find no window to fit a plane to.
-/// With 5% or more, it misses them all with probability 0.95^1000 < 1e-22.
-bool
-tooSparseForNoiseEstimate(const pcl::PointCloud<pcl::PointXYZ>& cloud)
-{
-  auto valid = [&](int u, int v) {
-    if (u < 0 || v < 0 || u >= int(cloud.width) || v >= int(cloud.height))
-      return false;
-    const pcl::PointXYZ& p = cloud[std::size_t(v) * cloud.width + u];
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-  };
-  int points = 0, fitting = 0;
-  for (int v = 0; v < int(cloud.height); ++v)
-    for (int u = 0; u < int(cloud.width); ++u) {
-      if (!valid(u, v))
-        continue;
-      int around = 0;
-      for (int dv = -1; dv <= 1; ++dv)
-        for (int du = -1; du <= 1; ++du)
-          around += valid(u + du, v + dv);
-      ++points;
-      fitting += around >= 4;
-    }
-  return fitting * 20 < points;
 }
 
 float

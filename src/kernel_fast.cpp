@@ -135,11 +135,12 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   const int r = search_window / 2;
   const int hp = patch_size / 2;
   const int border = r + hp;
-  // A row of box sums spans a tile row and r columns each side, rounded up to whole vectors; its
-  // products P - 1 more.
   // The staged maps and sums start `lead` columns before the tile (r rounded up to whole vectors).
+  // A row of box sums spans a tile row and r columns each side, rounded up to whole vectors, its
+  // products P - 1 more; all of it must fit in kRowStride.
   const int lead = roundUp(r);
-  const int tile_width = std::min(patch_size <= 7 ? kTileColsSmallPatch : kTileColsLargePatch, kRowStride - 2 * r - (patch_size - 1) - 2 * kVectorPad);
+  const int tile_width = std::min(patch_size <= 7 ? kTileColsSmallPatch : kTileColsLargePatch,
+                                  kRowStride - 2 * r - (patch_size - 1) - 2 * kVectorPad);
   if (tile_width < 16) {
     // Search windows of about kRowStride pixels and more: only the literal evaluation.
     computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
@@ -192,7 +193,6 @@ computeOffsetsFast(const Grid& center, const NormalField& normals,
   const int tiles = tile_rows * tile_cols;
   constexpr std::size_t kRow = kRowStride;
   const std::size_t slot_floats = kRingFields * kRow + kRingSlack;
-  (void)threads;
 #pragma omp parallel num_threads(threads)
   {
     Workspace ws(patch_size);

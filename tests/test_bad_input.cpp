@@ -1,6 +1,7 @@
 // range_nlm_denoise on broken, hostile and unusual input: every bad file gives one line that names
 // the file and the problem, exit status 1 and no output; every file PCL's writer makes still loads.
 #include "test_support.h"
+#include "../fuzz/fuzz_contract.h"
 
 #include <range_nlm/nonlocal_means_filter.h>
 
@@ -30,11 +31,6 @@ namespace
 {
 using Result = test::CommandResult;
 
-Result
-runTool(const std::string& args)
-{
-  return test::runTool("range_nlm_denoise", args);
-}
 
 std::string
 readBytes(const std::string& path)
@@ -111,7 +107,7 @@ protected:
   {
     SCOPED_TRACE(name);
     const std::string out = path("out_" + name);
-    const Result r = runTool(path(name) + " " + out);
+    const Result r = test::runDenoise(path(name) + " " + out);
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
     EXPECT_NE(r.output.find("'" + path(name) + "'"), std::string::npos) << r.output;
@@ -326,7 +322,7 @@ TEST_F(BadInput, SequenceAndDirectoryProblems)
   writeBytes(path("seq/b.pcd"), header(kWidth, kHeight, "binary") + binaryBody(plane()));
   const auto other = test::makeCloud(20, 12, test::plane({0.0, 0.0, 1.0}, 1.0), 0.002, 8);
   writeBytes(path("seq/c.pcd"), header(20, 12, "binary") + binaryBody(other));
-  Result r = runTool("--input-dir " + path("seq") + " --output-dir " + path("seq_out"));
+  Result r = test::runDenoise("--input-dir " + path("seq") + " --output-dir " + path("seq_out"));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("range_nlm_denoise: error: '" + path("seq/c.pcd") +
                           "': frame is 20 x 12 but the sequence is 16 x 12\n"),
@@ -342,7 +338,7 @@ TEST_F(BadInput, SequenceAndDirectoryProblems)
   for (const char* name : {"f0.pcd", "f1.pcd", "f3.pcd", "f4.pcd"})
     writeBytes(path("broken/") + name, header(kWidth, kHeight, "binary") + binaryBody(plane()));
   writeBytes(path("broken/f2.pcd"), header(kWidth, kHeight, "binary") + binaryBody(plane()).substr(0, 100));
-  r = runTool("--input-dir " + path("broken") + " --output-dir " + path("broken_out") + " --temporal-radius 1");
+  r = test::runDenoise("--input-dir " + path("broken") + " --output-dir " + path("broken_out") + " --temporal-radius 1");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("'" + path("broken/f2.pcd") + "': truncated PCD body"), std::string::npos) << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1 + 1) << r.output; // f0's report + the error
@@ -353,13 +349,13 @@ TEST_F(BadInput, SequenceAndDirectoryProblems)
 
   fs::create_directories(path("empty"));
   writeBytes(path("empty/notes.txt"), "no frames here\n");
-  r = runTool("--input-dir " + path("empty") + " --output-dir " + path("empty_out"));
+  r = test::runDenoise("--input-dir " + path("empty") + " --output-dir " + path("empty_out"));
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(r.output, "range_nlm_denoise: error: input directory '" + path("empty") +
                           "' holds no .pcd frame and no .png depth image\n");
   EXPECT_FALSE(fs::exists(path("empty_out")));
 
-  r = runTool("--input-dir " + path("nowhere") + " --output-dir " + path("nowhere_out"));
+  r = test::runDenoise("--input-dir " + path("nowhere") + " --output-dir " + path("nowhere_out"));
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(r.output, "range_nlm_denoise: error: input directory '" + path("nowhere") +
                           "' does not exist or is not a directory\n");
@@ -368,12 +364,12 @@ TEST_F(BadInput, SequenceAndDirectoryProblems)
   fs::create_directories(path("same"));
   writeBytes(path("same/a.pcd"), header(kWidth, kHeight, "binary") + binaryBody(plane()));
   const std::string before = readBytes(path("same/a.pcd"));
-  r = runTool("--input-dir " + path("same") + " --output-dir " + path("same") + "/.");
+  r = test::runDenoise("--input-dir " + path("same") + " --output-dir " + path("same") + "/.");
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(r.output, "range_nlm_denoise: error: output directory '" + path("same") +
                           "/.' is the input directory; refusing to overwrite the input (use --overwrite)\n");
   EXPECT_EQ(readBytes(path("same/a.pcd")), before);
-  r = runTool("--input-dir " + path("same") + " --output-dir " + path("same") + " --overwrite --quiet");
+  r = test::runDenoise("--input-dir " + path("same") + " --output-dir " + path("same") + " --overwrite --quiet");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(readBytes(path("same/a.pcd")), before);
   pcl::PointCloud<pcl::PointXYZ> overwritten;
@@ -425,7 +421,7 @@ TEST_F(BadInput, EveryFilePclWritesStillLoads)
 
   for (const std::string& name : files) {
     SCOPED_TRACE(name);
-    const Result r = runTool(path(name) + " " + path("out_" + name) + " --quiet");
+    const Result r = test::runDenoise(path(name) + " " + path("out_" + name) + " --quiet");
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_EQ(r.output, "");
     pcl::PCLPointCloud2 out;
@@ -452,31 +448,7 @@ TEST_F(BadInput, EveryFilePclWritesStillLoads)
 
 namespace
 {
-/// As in fuzz/fuzz_pcd_filter.cpp: under 5% of the valid points have 3 valid neighbours in their
-/// 3 x 3 window, so the noise estimate may legitimately find nothing to fit.
-bool
-tooSparseForNoiseEstimate(const pcl::PointCloud<pcl::PointXYZ>& cloud)
-{
-  auto valid = [&](int u, int v) {
-    if (u < 0 || v < 0 || u >= int(cloud.width) || v >= int(cloud.height))
-      return false;
-    const pcl::PointXYZ& p = cloud[std::size_t(v) * cloud.width + u];
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-  };
-  int points = 0, fitting = 0;
-  for (int v = 0; v < int(cloud.height); ++v)
-    for (int u = 0; u < int(cloud.width); ++u) {
-      if (!valid(u, v))
-        continue;
-      int around = 0;
-      for (int dv = -1; dv <= 1; ++dv)
-        for (int du = -1; du <= 1; ++du)
-          around += valid(u + du, v + dv);
-      ++points;
-      fitting += around >= 4;
-    }
-  return fitting * 20 < points;
-}
+using fuzz::tooSparseForNoiseEstimate;
 
 /// Filters a recipe written by fuzz/fuzz_pcd_filter (RANGE_NLM_FUZZ_RECIPE) and checks the
 /// contract the fuzzer checks: std::invalid_argument exactly for bad parameters or data, finite

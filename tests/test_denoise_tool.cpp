@@ -19,11 +19,6 @@ namespace
 {
 using Result = test::CommandResult;
 
-Result
-runTool(const std::string& args)
-{
-  return test::runTool("range_nlm_denoise", args);
-}
 
 class DenoiseTool : public ::testing::Test
 {
@@ -59,7 +54,7 @@ protected:
 
 TEST_F(DenoiseTool, HelpListsEveryOptionWithDefaults)
 {
-  const Result r = runTool("--help");
+  const Result r = test::runDenoise("--help");
   EXPECT_EQ(r.status, 0);
   for (const char* option : {"--search-window", "--patch", "--iterations", "--threads", "--distance-bandwidth",
                              "--similarity-bandwidth", "--seed", "--input-dir", "--output-dir", "--temporal-radius",
@@ -72,7 +67,7 @@ TEST_F(DenoiseTool, SingleFrameKeepsFieldsAndNaNs)
 {
   const auto in = frame(1);
   pcl::io::savePCDFileBinaryCompressed(path("in/a.pcd"), in);
-  const Result r = runTool(path("in/a.pcd") + " " + path("out.pcd"));
+  const Result r = test::runDenoise(path("in/a.pcd") + " " + path("out.pcd"));
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("d = "), std::string::npos);
   EXPECT_NE(r.output.find("ms"), std::string::npos);
@@ -97,7 +92,7 @@ TEST_F(DenoiseTool, DirectoryModeFiltersEveryFrameInNameOrder)
 {
   for (int k = 0; k < 3; ++k)
     pcl::io::savePCDFileBinary(path("in/f" + std::to_string(k) + ".pcd"), frame(10 + k));
-  const Result r = runTool("--input-dir " + path("in") + " --output-dir " + path("out"));
+  const Result r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("out"));
   ASSERT_EQ(r.status, 0) << r.output;
   for (int k = 0; k < 3; ++k)
     EXPECT_TRUE(fs::exists(path("out/f" + std::to_string(k) + ".pcd")));
@@ -109,10 +104,10 @@ TEST_F(DenoiseTool, TemporalAndPassScheduleProduceOneOutputPerFrame)
 {
   for (int k = 0; k < 4; ++k)
     pcl::io::savePCDFileBinary(path("in/f" + std::to_string(k) + ".pcd"), frame(20 + k));
-  Result r = runTool("--input-dir " + path("in") + " --output-dir " + path("t") + " --temporal-radius 1 --json");
+  Result r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("t") + " --temporal-radius 1 --json");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("\"frames\": 4"), std::string::npos) << r.output;
-  r = runTool("--input-dir " + path("in") + " --output-dir " + path("p") +
+  r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("p") +
               " --pass search=9,patch=5,radius=1 --pass search=5,patch=3,radius=0 --quiet");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(r.output, "");
@@ -120,7 +115,7 @@ TEST_F(DenoiseTool, TemporalAndPassScheduleProduceOneOutputPerFrame)
     EXPECT_TRUE(fs::exists(path("t/f" + std::to_string(k) + ".pcd")));
     EXPECT_TRUE(fs::exists(path("p/f" + std::to_string(k) + ".pcd")));
   }
-  r = runTool("--input-dir " + path("in") + " --output-dir " + path("q") + " --pass search=9,patch=4");
+  r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("q") + " --pass search=9,patch=4");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.output.find("patch_size = 4"), std::string::npos) << r.output;
 }
@@ -132,7 +127,7 @@ TEST_F(DenoiseTool, UsageErrorsExitWithTwo)
                                   std::string("--patch 0 ") + path("in/a.pcd") + " " + path("o.pcd"),
                                   std::string("--bogus"), std::string(""), path("in/a.pcd"),
                                   std::string("--preset fancy ") + path("in/a.pcd") + " " + path("o.pcd")}) {
-    const Result r = runTool(args);
+    const Result r = test::runDenoise(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
     EXPECT_FALSE(fs::exists(path("o.pcd")));
@@ -141,19 +136,19 @@ TEST_F(DenoiseTool, UsageErrorsExitWithTwo)
 
 TEST_F(DenoiseTool, InputErrorsExitWithOneAndWriteNothing)
 {
-  Result r = runTool(path("missing.pcd") + " " + path("o.pcd"));
+  Result r = test::runDenoise(path("missing.pcd") + " " + path("o.pcd"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("missing.pcd"), std::string::npos);
   EXPECT_FALSE(fs::exists(path("o.pcd")));
 
   std::ofstream(path("in/broken.pcd")) << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y\n";
-  r = runTool(path("in/broken.pcd") + " " + path("o.pcd"));
+  r = test::runDenoise(path("in/broken.pcd") + " " + path("o.pcd"));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("broken.pcd"), std::string::npos);
   EXPECT_FALSE(fs::exists(path("o.pcd")));
 
   fs::create_directories(path("empty"));
-  r = runTool("--input-dir " + path("empty") + " --output-dir " + path("out"));
+  r = test::runDenoise("--input-dir " + path("empty") + " --output-dir " + path("out"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("holds no .pcd frame"), std::string::npos) << r.output;
 
@@ -161,7 +156,7 @@ TEST_F(DenoiseTool, InputErrorsExitWithOneAndWriteNothing)
   fs::create_directories(path("seq"));
   pcl::io::savePCDFileBinary(path("seq/a.pcd"), frame(3));
   pcl::io::savePCDFileBinary(path("seq/b.pcd"), frame(4, 30, 30));
-  r = runTool("--input-dir " + path("seq") + " --output-dir " + path("seq_out"));
+  r = test::runDenoise("--input-dir " + path("seq") + " --output-dir " + path("seq_out"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("b.pcd': frame is 30 x 30 but the sequence is 40 x 30"), std::string::npos) << r.output;
   pcl::PointCloud<pcl::PointXYZRGBA> written;
@@ -175,7 +170,7 @@ TEST_F(DenoiseTool, InputErrorsExitWithOneAndWriteNothing)
   for (int i = 0; i < 10; ++i)
     line.push_back(pcl::PointXYZ(i, 0, 1));
   pcl::io::savePCDFileBinary(path("in/line.pcd"), line);
-  r = runTool(path("in/line.pcd") + " " + path("o.pcd"));
+  r = test::runDenoise(path("in/line.pcd") + " " + path("o.pcd"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("not organized"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("o.pcd")));

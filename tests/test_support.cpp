@@ -164,6 +164,12 @@ runTool(const std::string& tool, const std::string& args)
   return runCommand(std::string(RANGE_NLM_TOOLS_DIR) + "/" + tool + " " + args);
 }
 
+CommandResult
+runDenoise(const std::string& args)
+{
+  return runTool("range_nlm_denoise", args);
+}
+
 void
 punchHoles(pcl::PointCloud<pcl::PointXYZ>& cloud, double p, std::uint64_t seed)
 {

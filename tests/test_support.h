@@ -71,6 +71,9 @@ runCommand(const std::string& command);
 /// Runs the built tool `tool` (e.g. "range_nlm_denoise") with `args`.
 CommandResult
 runTool(const std::string& tool, const std::string& args);
+/// Runs the built range_nlm_denoise with `args`.
+CommandResult
+runDenoise(const std::string& args);
 
 /// Adds NaN holes: each point becomes NaN with probability p.
 void
