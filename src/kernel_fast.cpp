@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <cmath>
 #include <memory>
 
@@ -125,11 +126,20 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals, const std::
                      std::vector<float>& offsets);
 
 void
+computeOffsetsWindowed(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                       int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
+                       std::vector<float>& offsets);
+
+void
 computeOffsetsFast(const Grid& center, const NormalField& normals,
                    const std::vector<FrameTerm>& frames, int search_window, int patch_size,
                    int threads, const std::vector<unsigned char>& active,
                    std::vector<float>& offsets)
 {
+  if (std::getenv("RANGE_NLM_BOX") == nullptr) {
+    computeOffsetsWindowed(center, normals, frames, search_window, patch_size, threads, active, offsets);
+    return;
+  }
   const int width = center.width;
   const int height = center.height;
   const int r = search_window / 2;

@@ -3,6 +3,7 @@
 // chosen at run time; no inline function with external linkage is shared between the two.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 
 namespace range_nlm
@@ -51,6 +52,42 @@ struct WeightSide
   float* sums;
 };
 
+/// Pixels of a row evaluated together by the windowed evaluation (one per vector lane).
+constexpr int kWindowLanes = 16;
+
+/// A frame of the windowed evaluation: x, y, z planes padded so that every window read of every
+/// row stays inside (NaN at invalid and outside pixels), pointing at pixel (0, 0); the frame
+/// weight; 1 / d^2 and 1 / s^2 per centre pixel (rows of WindowTask::lane_width) or, when null,
+/// the scalars.
+struct WindowPlane
+{
+  const float* x = nullptr;
+  const float* y = nullptr;
+  const float* z = nullptr;
+  float psi = 1.0f;
+  const float* inv_d2 = nullptr;
+  const float* inv_s2 = nullptr;
+  float d2 = 0.0f, s2 = 0.0f;
+};
+
+/// Everything one row of the windowed evaluation reads. Per-pixel arrays have rows of
+/// lane_width (the width rounded up to whole vectors) values; pixels past the width and
+/// inactive pixels have active 0 and a zero normal.
+struct WindowTask
+{
+  int lane_width = 0;
+  int search = 0;
+  int patch = 0;
+  std::ptrdiff_t stride = 0; // row stride of the padded planes
+  WindowPlane center;        // the filtered frame (its patches)
+  const WindowPlane* frames = nullptr;
+  int frame_count = 0;
+  const float* nx = nullptr;
+  const float* ny = nullptr;
+  const float* nz = nullptr;
+  const float* active = nullptr;
+};
+
 struct RowKernels
 {
   /// Products D D^T (and the pair flag) for `n + patch - 1` pixels of centre row c and candidate
@@ -75,6 +112,11 @@ struct RowKernels
   /// w = flag_j exp(-d^2 inv[u]); num += w d; den += w.
   void (*smoothing)(const float* c_rho, const float* q_rho, const float* q_flag, const float* inv, int width,
                     float* num, float* den);
+  /// The windowed evaluation of row v: the filtered offsets h of its lane_width pixels (0 for
+  /// inactive ones) into `out`; `scratch` holds window_scratch() floats, aligned to 64 bytes.
+  void (*window_row)(const WindowTask& task, int v, float* scratch, float* out);
+  /// Floats of per-thread scratch window_row needs for a search window and patch size.
+  std::size_t (*window_scratch)(int search_window, int patch_size);
 };
 
 /// Whether this CPU runs the AVX-512 (F, VL, DQ, BW) kernels; RANGE_NLM_NO_AVX512 in the
