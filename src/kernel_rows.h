@@ -57,7 +57,7 @@ constexpr int kWindowLanes = 16;
 
 /// A frame of the windowed evaluation: x, y, z planes padded so that every window read of every
 /// row stays inside (NaN at invalid and outside pixels), pointing at pixel (0, 0); the frame
-/// weight; 1 / d^2 and 1 / s^2 per centre pixel (rows of WindowTask::lane_width) or, when null,
+/// weight; 1 / d^2 and 1 / s^2 of the row's pixels (WindowTask::lane_width values) or, when null,
 /// the scalars.
 struct WindowPlane
 {
@@ -70,8 +70,8 @@ struct WindowPlane
   float d2 = 0.0f, s2 = 0.0f;
 };
 
-/// Everything one row of the windowed evaluation reads. Per-pixel arrays have rows of
-/// lane_width (the width rounded up to whole vectors) values; pixels past the width and
+/// Everything one row of the windowed evaluation reads. The per-pixel arrays hold the row's
+/// pixels, lane_width values (the width rounded up to kWindowLanes); pixels past the width and
 /// inactive pixels have active 0 and a zero normal.
 struct WindowTask
 {

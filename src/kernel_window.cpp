@@ -5,6 +5,7 @@
 
 #include <range_nlm/kernel.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -25,48 +26,54 @@ laneWidth(int width)
 }
 
 /// x, y, z of a frame with `pad` NaN pixels above, below and left of it and enough on the right
-/// for the vectors and windows of the last lanes.
+/// for the vectors and windows of the last lanes. Written once, in parallel rows.
 struct NanPaddedFrame
 {
   int pad = 0;
   std::ptrdiff_t stride = 0;
-  std::vector<float> x, y, z;
+  std::unique_ptr<float[]> x, y, z;
 
   NanPaddedFrame(const Grid& g, int pad_, std::ptrdiff_t stride_, int threads) : pad(pad_), stride(stride_)
   {
-    const std::size_t n = static_cast<std::size_t>(stride) * (g.height + 2 * pad) + 2 * kWindowLanes;
+    const int rows = g.height + 2 * pad;
+    // One row more than the frame: the last vectors of the last row may read past its end.
+    const std::size_t n = static_cast<std::size_t>(stride) * (rows + 1);
+    x.reset(new float[n]);
+    y.reset(new float[n]);
+    z.reset(new float[n]);
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    x.assign(n, nan);
-    y.assign(n, nan);
-    z.assign(n, nan);
     (void)threads;
 #pragma omp parallel for schedule(static) num_threads(threads)
-    for (int v = 0; v < g.height; ++v)
+    for (int row = 0; row < rows + 1; ++row) {
+      float* px = &x[static_cast<std::size_t>(row) * stride];
+      float* py = &y[static_cast<std::size_t>(row) * stride];
+      float* pz = &z[static_cast<std::size_t>(row) * stride];
+      std::fill_n(px, stride, nan);
+      std::fill_n(py, stride, nan);
+      std::fill_n(pz, stride, nan);
+      const int v = row - pad;
+      if (v < 0 || v >= g.height)
+        continue;
       for (int u = 0; u < g.width; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * g.width + u;
         if (!g.valid[i])
           continue;
-        const std::size_t k = origin() + static_cast<std::size_t>(v) * stride + u;
-        x[k] = g.x[i];
-        y[k] = g.y[i];
-        z[k] = g.z[i];
+        px[pad + u] = g.x[i];
+        py[pad + u] = g.y[i];
+        pz[pad + u] = g.z[i];
       }
+    }
   }
   std::size_t origin() const { return static_cast<std::size_t>(pad) * stride + pad; }
+  WindowPlane plane() const
+  {
+    WindowPlane w;
+    w.x = &x[origin()];
+    w.y = &y[origin()];
+    w.z = &z[origin()];
+    return w;
+  }
 };
-
-/// A per-pixel map (width x height) in rows of lane_width values, zero past the width.
-std::vector<float>
-laneRows(const std::vector<float>& map, int width, int height, int lane_width, int threads)
-{
-  std::vector<float> out(static_cast<std::size_t>(lane_width) * height, 0.0f);
-  (void)threads;
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int v = 0; v < height; ++v)
-    for (int u = 0; u < width; ++u)
-      out[static_cast<std::size_t>(v) * lane_width + u] = map[static_cast<std::size_t>(v) * width + u];
-  return out;
-}
 
 } // namespace
 
@@ -80,21 +87,14 @@ computeOffsetsWindowed(const Grid& center, const NormalField& normals, const std
   const int height = center.height;
   const int lane_width = laneWidth(width);
   const int reach = search_window / 2 + patch_size / 2;
-  // A window row of the last vector ends window_scratch's columns past its first pixel at most:
-  // search rounded up to 4 shifts, plus the patch; 8 more keep every read inside.
+  // Reads of a row reach from `reach` columns before its first pixel to the window of its last
+  // vector: lane_width, then the search window rounded up to 4 shifts plus the patch; 8 more
+  // keep every read inside.
   const std::ptrdiff_t stride = reach + lane_width + search_window + patch_size + 8;
 
   const NanPaddedFrame padded_center(center, reach, stride, threads);
   std::vector<std::unique_ptr<NanPaddedFrame>> padded(frames.size());
-  std::vector<std::vector<float>> maps_d2(frames.size()), maps_s2(frames.size());
   std::vector<WindowPlane> planes(frames.size());
-  const auto plane = [](const NanPaddedFrame& p) {
-    WindowPlane w;
-    w.x = &p.x[p.origin()];
-    w.y = &p.y[p.origin()];
-    w.z = &p.z[p.origin()];
-    return w;
-  };
   for (std::size_t f = 0; f < frames.size(); ++f) {
     const FrameTerm& term = frames[f];
     const NanPaddedFrame* p = &padded_center;
@@ -103,62 +103,75 @@ computeOffsetsWindowed(const Grid& center, const NormalField& normals, const std
       p = padded[f].get();
     }
     WindowPlane& w = planes[f];
-    w = plane(*p);
+    w = p->plane();
     w.psi = term.weight;
     w.d2 = inverseSquare(term.distance_bandwidth);
     w.s2 = inverseSquare(term.similarity_bandwidth);
-    if (term.inverse_distance2) {
-      maps_d2[f] = laneRows(*term.inverse_distance2, width, height, lane_width, threads);
-      w.inv_d2 = maps_d2[f].data();
-    }
-    if (term.inverse_similarity2) {
-      maps_s2[f] = laneRows(*term.inverse_similarity2, width, height, lane_width, threads);
-      w.inv_s2 = maps_s2[f].data();
-    }
   }
-
-  // Normals and the active flag in lane rows; inactive points get a zero normal.
-  const std::size_t lanes = static_cast<std::size_t>(lane_width) * height;
-  std::vector<float> nx(lanes, 0.0f), ny(lanes, 0.0f), nz(lanes, 0.0f), act(lanes, 0.0f);
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int v = 0; v < height; ++v)
-    for (int u = 0; u < width; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * width + u;
-      const std::size_t k = static_cast<std::size_t>(v) * lane_width + u;
-      const bool ok = center.valid[i] && (active.empty() || active[i]) && std::isfinite(normals.nx[i]) &&
-                      std::isfinite(normals.ny[i]) && std::isfinite(normals.nz[i]);
-      if (!ok)
-        continue;
-      nx[k] = normals.nx[i];
-      ny[k] = normals.ny[i];
-      nz[k] = normals.nz[i];
-      act[k] = 1.0f;
-    }
-
-  WindowTask task;
-  task.lane_width = lane_width;
-  task.search = search_window;
-  task.patch = patch_size;
-  task.stride = stride;
-  task.center = plane(padded_center);
-  task.frames = planes.data();
-  task.frame_count = static_cast<int>(planes.size());
-  task.nx = nx.data();
-  task.ny = ny.data();
-  task.nz = nz.data();
-  task.active = act.data();
   const std::size_t scratch_floats = kernels.window_scratch(search_window, patch_size);
+  const std::size_t frame_count = frames.size();
 #pragma omp parallel num_threads(threads)
   {
-    // Scratch aligned to a cache line, and one output row.
-    std::vector<float> storage(scratch_floats + lane_width + 16);
+    // Per thread: the kernel scratch (cache-line aligned), then the staged row: normal, active
+    // flag, 1 / d^2 and 1 / s^2 per frame, and the output.
+    const std::size_t row_floats = static_cast<std::size_t>(lane_width) * (5 + 2 * frame_count);
+    std::vector<float> storage(scratch_floats + row_floats + 16);
     const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(storage.data());
     float* scratch = storage.data() + ((64 - address % 64) % 64) / sizeof(float);
-    float* out = scratch + scratch_floats;
+    float* staged = scratch + scratch_floats;
+    const auto field = [&](std::size_t k) { return staged + k * lane_width; };
+    float* out = field(4);
+    std::vector<WindowPlane> row_planes = planes;
+    WindowTask task;
+    task.lane_width = lane_width;
+    task.search = search_window;
+    task.patch = patch_size;
+    task.stride = stride;
+    task.center = padded_center.plane();
+    task.frames = row_planes.data();
+    task.frame_count = static_cast<int>(frame_count);
+    task.nx = field(0);
+    task.ny = field(1);
+    task.nz = field(2);
+    task.active = field(3);
+    for (std::size_t f = 0; f < frame_count; ++f) {
+      if (frames[f].inverse_distance2)
+        row_planes[f].inv_d2 = field(5 + 2 * f);
+      if (frames[f].inverse_similarity2)
+        row_planes[f].inv_s2 = field(6 + 2 * f);
+    }
 #pragma omp for schedule(dynamic, 1)
     for (int v = 0; v < height; ++v) {
+      // Stage the row (inactive points: zero normal; past the width: zeros).
+      const std::size_t first = static_cast<std::size_t>(v) * width;
+      const float* gx = &normals.nx[first];
+      const float* gy = &normals.ny[first];
+      const float* gz = &normals.nz[first];
+      const unsigned char* valid = &center.valid[first];
+      const unsigned char* selected = active.empty() ? nullptr : &active[first];
+      float* sx = field(0);
+      float* sy = field(1);
+      float* sz = field(2);
+      float* sa = field(3);
+      for (int u = 0; u < width; ++u) {
+        // A NaN normal fails the comparisons (so does an infinite one).
+        const bool ok = valid[u] && (!selected || selected[u]) && std::fabs(gx[u]) <= 1e30f &&
+                        std::fabs(gy[u]) <= 1e30f && std::fabs(gz[u]) <= 1e30f;
+        sx[u] = ok ? gx[u] : 0.0f;
+        sy[u] = ok ? gy[u] : 0.0f;
+        sz[u] = ok ? gz[u] : 0.0f;
+        sa[u] = ok ? 1.0f : 0.0f;
+      }
+      for (int k = 0; k < 4; ++k)
+        std::fill(field(k) + width, field(k) + lane_width, 0.0f);
+      for (std::size_t f = 0; f < frame_count; ++f) {
+        if (frames[f].inverse_distance2)
+          std::copy_n(&(*frames[f].inverse_distance2)[first], width, field(5 + 2 * f));
+        if (frames[f].inverse_similarity2)
+          std::copy_n(&(*frames[f].inverse_similarity2)[first], width, field(6 + 2 * f));
+      }
       kernels.window_row(task, v, scratch, out);
-      std::copy(out, out + width, offsets.begin() + static_cast<std::ptrdiff_t>(v) * width);
+      std::copy(out, out + width, offsets.begin() + static_cast<std::ptrdiff_t>(first));
     }
   }
 }
