@@ -3,6 +3,11 @@
 #include "kernel_math.h"
 #include "kernel_rows.h"
 
+// GCC 12 reports the undefined first operand that its own avx512fintrin.h passes to the
+// rounding and scaling builtins as maybe uninitialized.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <immintrin.h>
+
 namespace range_nlm
 {
 namespace detail
