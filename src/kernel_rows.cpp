@@ -1,4 +1,4 @@
-// The baseline row kernels and the run-time choice between them and the AVX2 ones.
+// The baseline row kernels and the run-time choice between them and the AVX2 and AVX-512 ones.
 #include "kernel_math.h"
 #include "kernel_rows.h"
 
@@ -46,6 +46,21 @@ cpuRunsAvx2()
 #else
   return false;
 #endif
+}
+
+std::vector<const RowKernels*>
+supportedRowKernels()
+{
+  std::vector<const RowKernels*> all{&baseline::kKernels};
+#if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX2_KERNELS)
+  if (cpuRunsAvx2())
+    all.push_back(&avx2RowKernels());
+#endif
+#if defined(__x86_64__) && defined(RANGE_NLM_HAVE_AVX512_KERNELS)
+  if (cpuRunsAvx512())
+    all.push_back(&avx512RowKernels());
+#endif
+  return all;
 }
 
 const RowKernels&

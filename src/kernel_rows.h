@@ -1,18 +1,19 @@
-// Row kernels of the box-filtered evaluation (internal). They work on raw pointers only, so the
-// same source (kernel_rows.inc) is compiled once for the baseline ISA and once for AVX2+FMA and
-// chosen at run time; no inline function with external linkage is shared between the two.
+// Row kernels of the windowed evaluation, the normal fits' moments and the range pre-smoothing
+// (internal). They work on raw pointers only, so the same source (kernel_rows.inc) is compiled
+// for the baseline instruction set, for AVX2 + FMA and for AVX-512 and chosen at run time; no
+// inline function with external linkage is shared between the builds.
 #pragma once
+
+#include <range_nlm/kernel.h>
 
 #include <algorithm>
 #include <cstddef>
+#include <vector>
 
 namespace range_nlm
 {
 namespace detail
 {
-
-/// Channels box-filtered per shift: D D^T entries xx, xy, xz, yy, yz, zz and the pair count.
-constexpr int kChannels = 7;
 
 /// One row of a padded SoA frame: pointers to x, y, z and the validity flag (1/0).
 struct RowPointers
@@ -21,35 +22,6 @@ struct RowPointers
   const float* y;
   const float* z;
   const float* f;
-};
-
-/// Fixed distance between the fields of one row in the box-filter buffers (ring rows, products,
-/// staged per-pixel maps, weight sums), so that the hot loops address every field from one
-/// pointer. A row of box sums holds at most this many pixels.
-constexpr int kRowStride = 1040;
-/// Fields of a ring row: the kChannels box-summed channels, then the unfiltered D (x, y, z) and
-/// the pair flag of the row's own pixels.
-constexpr int kRingFields = kChannels + 4;
-/// Floats after a ring row's last field that box_row may write (its vector tail).
-constexpr int kRingSlack = 64;
-/// Fields of the staged per-pixel maps of a weight side: (nx, ny, nz) / s and 1 / d^2.
-constexpr int kSideFields = 4;
-
-/// The ring of horizontally box-summed rows whose sum is the vertical box sum: P rows (oldest
-/// last), each kRingFields x kRowStride floats (plus kRingSlack), offset to the first pixel; the
-/// middle one is the row whose weights are formed.
-struct BoxRows
-{
-  const float* const* rows;
-  int count;
-};
-
-/// The output pixels one side of a shift updates: their staged maps (kSideFields fields) and
-/// weight sums (num / s, then den, kRowStride apart), offset to the first pixel.
-struct WeightSide
-{
-  const float* maps;
-  float* sums;
 };
 
 /// Pixels of a row evaluated together by the windowed evaluation (one per vector lane).
@@ -90,19 +62,6 @@ struct WindowTask
 
 struct RowKernels
 {
-  /// Products D D^T (and the pair flag) for `n + patch - 1` pixels of centre row c and candidate
-  /// row k, rounded up to 16 (both offset to the first pixel, with that much readable slack;
-  /// prod holds kChannels x kRowStride floats), then their
-  /// horizontal box sums over `patch` pixels into the first kChannels fields of the ring row
-  /// `out`, and the unfiltered D and flag of the n middle pixels into its last 4 fields.
-  void (*box_row)(RowPointers c, RowPointers k, int n, int patch, float* prod, float* out);
-  /// For n pixels u of one shift delta: M = the vertical box sum of `box`, D and flag m from its
-  /// middle row, Sim = n^T M n / pairs, and per side
-  ///   w = psi m exp(-(|D|^2 / d^2 + Sim / s^2)), num += w h / s, den += w
-  /// with h = n . D for side a (the pixels of the D row, candidates p + delta) and h = -n . D for
-  /// side b (the candidate pixels, whose candidates p - delta give the same D D^T). a or b may
-  /// be null.
-  void (*shift_weights)(const BoxRows& box, int n, float psi, const WeightSide* a, const WeightSide* b);
   /// Moments of one neighbour offset for a row of centres (normal estimation): q = p_j - p_i,
   /// w = flag_j if |rho_j - rho_i| * range_on <= gate and |q . n0| <= gate, then
   /// acc[0..9] += w * (1, qx, qy, qz, qx qx, qx qy, qx qz, qy qy, qy qz, qz qz), each a row.
@@ -119,6 +78,13 @@ struct RowKernels
   std::size_t (*window_scratch)(int search_window, int patch_size);
 };
 
+/// The windowed evaluation (computeOffsets' fast path) with the given build of the row kernels;
+/// `offsets` has the size of the grid. For tests; computeOffsets takes rowKernels().
+void
+computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
+                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets);
+
 /// Whether this CPU runs the AVX-512 (F, VL, DQ, BW) kernels; RANGE_NLM_NO_AVX512 in the
 /// environment turns them off (for comparisons).
 bool
@@ -133,6 +99,9 @@ rowKernels();
 /// The baseline kernels (for tests).
 const RowKernels&
 baselineRowKernels();
+/// Every build of the kernels this CPU runs: baseline, then AVX2, then AVX-512 (for tests).
+std::vector<const RowKernels*>
+supportedRowKernels();
 
 } // namespace detail
 } // namespace range_nlm

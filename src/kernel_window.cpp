@@ -78,11 +78,10 @@ struct NanPaddedFrame
 } // namespace
 
 void
-computeOffsetsWindowed(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
-                       int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                       std::vector<float>& offsets)
+computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
+                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets)
 {
-  const RowKernels& kernels = rowKernels();
   const int width = center.width;
   const int height = center.height;
   const int lane_width = laneWidth(width);
@@ -174,6 +173,14 @@ computeOffsetsWindowed(const Grid& center, const NormalField& normals, const std
       std::copy(out, out + width, offsets.begin() + static_cast<std::ptrdiff_t>(first));
     }
   }
+}
+
+void
+computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                   int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
+                   std::vector<float>& offsets)
+{
+  computeOffsetsWindowed(rowKernels(), center, normals, frames, search_window, patch_size, threads, active, offsets);
 }
 
 } // namespace detail
