@@ -1,5 +1,7 @@
-// The box-filtered kernel against the direct one, and the small math helpers.
+// The fast (windowed) kernel against the direct one, and the small math helpers.
 #include "test_support.h"
+
+#include "../src/kernel_rows.h"
 
 #include <range_nlm/kernel.h>
 
@@ -75,9 +77,9 @@ TEST(Kernel, FastMatchesDirectWithSeveralFrames)
 
 TEST(Kernel, FastMatchesDirectAcrossTilesWithPerPointBandwidths)
 {
-  // Larger than one tile of the box-filtered evaluation in both directions (and not a multiple of
-  // it), with holes, per-point bandwidth maps and three frames: shifts that cross tile borders,
-  // and the shared +delta / -delta sums of the centre frame, must give the literal formula.
+  // A wide frame whose width is no multiple of the vector width, with holes, per-point bandwidth
+  // maps and three frames: rows of vectors with and without holes, their last partial vector,
+  // and the per-pixel maps must give the literal formula.
   const Viewpoint origin{0, 0, 0};
   const int w = 300, h = 75;
   const Grid a = randomSurface(w, h, 0.1, 11), b = randomSurface(w, h, 0.1, 12), c = randomSurface(w, h, 0.1, 13);
@@ -102,6 +104,54 @@ TEST(Kernel, FastMatchesDirectAcrossTilesWithPerPointBandwidths)
   computeOffsets(b, normals, {centre}, 5, 11, Evaluation::fast, 3, {}, fast);
   computeOffsets(b, normals, {centre}, 5, 11, Evaluation::direct, 3, {}, direct);
   EXPECT_LT(maxDifference(fast, direct), 2e-6);
+}
+
+TEST(Kernel, EveryInstructionSetBuildMatchesDirect)
+{
+  // The baseline, AVX2 and AVX-512 builds this CPU runs (computeOffsets takes only the fastest),
+  // on widths around the vector widths, with and without holes, three frames, the compile-time
+  // patch sizes and a run-time one (13), remainders of the blocks of four shifts (search 1 .. 9),
+  // and the correlation sums (patches of 7 and more without holes).
+  const Viewpoint origin{0, 0, 0};
+  const std::vector<const detail::RowKernels*> builds = detail::supportedRowKernels();
+  ASSERT_GE(builds.size(), 1u);
+  for (int holes = 0; holes < 2; ++holes)
+    for (int w : {7, 17, 33}) {
+      const Grid a = randomSurface(w, 21, holes ? 0.12 : 0.0, 40 + w);
+      const Grid b = randomSurface(w, 21, holes ? 0.12 : 0.0, 41 + w);
+      const NormalField normals = estimateNormals(b, 3, origin, 1);
+      const std::vector<FrameTerm> terms{{&a, 0.03f, 0.005f, 0.4f}, {&b, 0.02f, 0.004f, 1.0f}};
+      for (int search : {1, 3, 5, 7, 9})
+        for (int patch : {1, 3, 5, 7, 9, 11, 13}) {
+          std::vector<float> direct;
+          computeOffsets(b, normals, terms, search, patch, Evaluation::direct, 2, {}, direct);
+          for (std::size_t k = 0; k < builds.size(); ++k) {
+            std::vector<float> fast(b.size(), -1.0f);
+            detail::computeOffsetsWindowed(*builds[k], b, normals, terms, search, patch, 2, {}, fast);
+            EXPECT_LT(maxDifference(fast, direct), 2e-6)
+                << "build " << k << " width " << w << " holes " << holes << " search " << search << " patch " << patch;
+          }
+        }
+    }
+}
+
+TEST(Kernel, FastKeepsPrecisionWherePatchesStraddleADepthEdge)
+{
+  // A 0.5 m step with 0.2 mm noise: patches that straddle the step at the same place have a
+  // small Sim but sums of squared heights ten thousand times larger, where A - 2C + B cancels in
+  // float. The fast path must still match the literal formula (it sums those pairs again).
+  const Viewpoint origin{0, 0, 0};
+  auto cloud = test::makeCloud(40, 24, [](double a, double, int u, int) { return 1.0 + 0.05 * a + (u >= 20 ? 0.5 : 0.0); },
+                               0.0002, 5);
+  const Grid grid = Grid::fromInterleaved(&cloud[0].x, 40, 24, sizeof(pcl::PointXYZ) / sizeof(float));
+  const NormalField normals = estimateNormals(grid, 3, origin, 1);
+  const std::vector<FrameTerm> terms{{&grid, 0.05f, 0.0004f, 1.0f}};
+  for (int patch : {7, 9, 11}) {
+    std::vector<float> fast, direct;
+    computeOffsets(grid, normals, terms, 7, patch, Evaluation::fast, 2, {}, fast);
+    computeOffsets(grid, normals, terms, 7, patch, Evaluation::direct, 2, {}, direct);
+    EXPECT_LT(maxDifference(fast, direct), 2e-7) << "patch " << patch;
+  }
 }
 
 TEST(Kernel, ActiveMaskLimitsComputation)
