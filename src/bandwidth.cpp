@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -13,23 +14,48 @@ Bandwidths
 estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
                    std::uint64_t seed)
 {
-  // Valid points with a normal, in index order (written branch-free, then trimmed).
-  std::vector<int> candidates(grid.size());
-  std::size_t count_candidates = 0;
-  for (std::size_t i = 0; i < grid.size(); ++i) {
-    candidates[count_candidates] = static_cast<int>(i);
-    count_candidates += (grid.valid[i] && std::isfinite(normals.nx[i])) ? 1 : 0;
+  // Candidates are the valid points with a normal, in index order; sample m is the m-th of them.
+  // They are counted per block of kBlock points (in parallel), so that the m-th is found by a
+  // binary search over the blocks and a scan of one block, without a list of all of them.
+  constexpr std::size_t kBlock = 256;
+  const std::size_t n = grid.size();
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  // Branch-free (the counting loop vectorizes): a NaN or infinite normal fails the comparison.
+  const auto candidate = [&](std::size_t i) {
+    return (grid.valid[i] != 0) & (std::fabs(normals.nx[i]) <= std::numeric_limits<float>::max());
+  };
+  std::vector<std::size_t> first(blocks + 1, 0); // candidates before each block
+#pragma omp parallel for schedule(static)
+  for (std::size_t b = 0; b < blocks; ++b) {
+    std::size_t count = 0;
+    for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i)
+      count += candidate(i) ? 1 : 0;
+    first[b + 1] = count;
   }
-  candidates.resize(count_candidates);
-  if (candidates.empty())
+  for (std::size_t b = 0; b < blocks; ++b)
+    first[b + 1] += first[b];
+  const std::size_t candidates = first[blocks];
+  if (candidates == 0)
     throw std::invalid_argument("range_nlm: the cloud has no valid point with a normal; nothing to "
                                 "estimate the bandwidths from (all points NaN?)");
-  // A 64-bit Mersenne twister with our own index mapping: identical on every platform.
+  // A 64-bit Mersenne twister with our own index mapping: identical on every platform. The
+  // samples are visited in index order (they are summed in double; the order only changes
+  // rounding far below float precision), which keeps the window reads local.
   std::mt19937_64 rng(seed);
+  std::vector<int> picks(static_cast<std::size_t>(std::max(samples, 0)));
+  for (int& k : picks) {
+    const std::size_t m = rng() % candidates;
+    const std::size_t b = static_cast<std::size_t>(std::upper_bound(first.begin(), first.end(), m) - first.begin()) - 1;
+    std::size_t seen = first[b], i = b * kBlock;
+    for (;; ++i)
+      if (candidate(i) && seen++ == m)
+        break;
+    k = static_cast<int>(i);
+  }
+  std::sort(picks.begin(), picks.end());
   const int r = search_window / 2;
   double sum_mu = 0.0, sum_sigma = 0.0;
-  for (int s = 0; s < samples; ++s) {
-    const int k = candidates[rng() % candidates.size()];
+  for (const int k : picks) {
     const int u = k % grid.width, v = k / grid.width;
     const double nx = normals.nx[k], ny = normals.ny[k], nz = normals.nz[k];
     double max_dist2 = 0.0, sum_h = 0.0, sum_h2 = 0.0;
