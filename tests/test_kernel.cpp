@@ -75,7 +75,7 @@ TEST(Kernel, FastMatchesDirectWithSeveralFrames)
   EXPECT_LT(maxDifference(fast, direct), 2e-6);
 }
 
-TEST(Kernel, FastMatchesDirectAcrossTilesWithPerPointBandwidths)
+TEST(Kernel, FastMatchesDirectOnAWideFrameWithPerPointBandwidths)
 {
   // A wide frame whose width is no multiple of the vector width, with holes, per-point bandwidth
   // maps and three frames: rows of vectors with and without holes, their last partial vector,

@@ -79,7 +79,7 @@ addFilterOptions(po::options_description& options)
     ("similarity-bandwidth", po::value<float>(), "s in cloud units [default: automatic]")
     ("seed", po::value<std::uint64_t>()->default_value(42), "seed of the bandwidth sample")
     ("normal-window", po::value<int>(), ("odd side of the normal-estimation neighbourhood [preset: " + std::to_string(d.normal_window) + "]").c_str())
-    ("direct", "use the direct (reference) evaluation instead of the box-filtered one")
+    ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
     ("line-of-sight", "move points along their camera ray instead of the normal (depth sensors)");
   // clang-format on
 }

@@ -26,8 +26,9 @@ enum class BandwidthModel
 /// How the patch similarity Sim(i, j) is evaluated. Both give the same result to float precision.
 enum class Evaluation
 {
-  /// Box-filtered similarity: for each shift delta the entries of D D^T (D = p_u - p_{u+delta})
-  /// are box-filtered over the patch once for all pixels. Cost ~ S^2 per point, independent of P.
+  /// Windowed evaluation: pixels are taken 16 (8, 4) at a time, one per vector lane; each point of
+  /// the (S + P - 1)^2 window is projected once on the pixel's normal, then every patch pair
+  /// costs one or two vector operations from registers and a small cache-resident scratch.
   fast,
   /// Literal evaluation of the formula: S^2 * P^2 operations per point. Kept as the reference.
   direct
