@@ -42,24 +42,32 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
   // samples are visited in index order (they are summed in double; the order only changes
   // rounding far below float precision), which keeps the window reads local.
   std::mt19937_64 rng(seed);
-  std::vector<int> picks(static_cast<std::size_t>(std::max(samples, 0)));
-  for (int& k : picks) {
-    const std::size_t m = rng() % candidates;
+  const std::size_t count = static_cast<std::size_t>(std::max(samples, 0));
+  std::vector<std::size_t> order(count);
+  for (std::size_t& m : order)
+    m = rng() % candidates;
+  std::vector<int> picks(count);
+#pragma omp parallel for schedule(static)
+  for (std::size_t s = 0; s < count; ++s) {
+    const std::size_t m = order[s];
     const std::size_t b = static_cast<std::size_t>(std::upper_bound(first.begin(), first.end(), m) - first.begin()) - 1;
     std::size_t seen = first[b], i = b * kBlock;
     for (;; ++i)
       if (candidate(i) && seen++ == m)
         break;
-    k = static_cast<int>(i);
+    picks[s] = static_cast<int>(i);
   }
   std::sort(picks.begin(), picks.end());
+  // Per sample in parallel, then summed in index order (the same sums for any thread count).
   const int r = search_window / 2;
-  double sum_mu = 0.0, sum_sigma = 0.0;
-  for (const int k : picks) {
+  std::vector<double> extent(count), spread(count);
+#pragma omp parallel for schedule(static)
+  for (std::size_t s = 0; s < count; ++s) {
+    const int k = picks[s];
     const int u = k % grid.width, v = k / grid.width;
     const double nx = normals.nx[k], ny = normals.ny[k], nz = normals.nz[k];
     double max_dist2 = 0.0, sum_h = 0.0, sum_h2 = 0.0;
-    int count = 0;
+    int valid = 0;
     for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
       for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
         const int j = jv * grid.width + ju;
@@ -72,11 +80,16 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
         const double h = dx * nx + dy * ny + dz * nz;
         sum_h += h;
         sum_h2 += h * h;
-        ++count;
+        ++valid;
       }
-    const double mean = sum_h / count;
-    sum_mu += std::sqrt(max_dist2);
-    sum_sigma += std::sqrt(std::max(0.0, sum_h2 / count - mean * mean));
+    const double mean = sum_h / valid;
+    extent[s] = std::sqrt(max_dist2);
+    spread[s] = std::sqrt(std::max(0.0, sum_h2 / valid - mean * mean));
+  }
+  double sum_mu = 0.0, sum_sigma = 0.0;
+  for (std::size_t s = 0; s < count; ++s) {
+    sum_mu += extent[s];
+    sum_sigma += spread[s];
   }
   Bandwidths b;
   b.mu_d = static_cast<float>(sum_mu / samples);
