@@ -87,8 +87,7 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
   const int lane_width = laneWidth(width);
   const int reach = search_window / 2 + patch_size / 2;
   // Reads of a row reach from `reach` columns before its first pixel to the window of its last
-  // vector: lane_width, then the search window rounded up to 4 shifts plus the patch; 8 more
-  // keep every read inside.
+  // vector: lane_width, then the search window plus the patch; 8 more keep every read inside.
   const std::ptrdiff_t stride = reach + lane_width + search_window + patch_size + 8;
 
   const NanPaddedFrame padded_center(center, reach, stride, threads);
