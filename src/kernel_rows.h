@@ -6,7 +6,6 @@
 
 #include <range_nlm/kernel.h>
 
-#include <algorithm>
 #include <cstddef>
 #include <vector>
 
