@@ -20,7 +20,7 @@ computeOffsetsDirect(const Grid&, const NormalField&, const std::vector<FrameTer
                      const std::vector<unsigned char>&, std::vector<float>&);
 void
 computeOffsetsFast(const Grid&, const NormalField&, const std::vector<FrameTerm>&, int, int, int,
-                   const std::vector<unsigned char>&, std::vector<float>&);
+                   const std::vector<unsigned char>&, std::vector<float>&, std::vector<float>&);
 
 float
 expNonPositive(float x)
@@ -52,17 +52,56 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
                int search_window, int patch_size, Evaluation evaluation, int threads,
                const std::vector<unsigned char>& active, std::vector<float>& offsets)
 {
+  std::vector<float> planes;
+  detail::computeOffsets(center, normals, frames, search_window, patch_size, evaluation, threads, active, offsets,
+                         planes);
+}
+
+void
+detail::computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                       int search_window, int patch_size, Evaluation evaluation, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets,
+                       std::vector<float>& planes)
+{
   for (const FrameTerm& term : frames)
     if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height)
       throw std::invalid_argument("range_nlm: every frame must have the size of the filtered frame");
   if (!active.empty() && active.size() != center.size())
     throw std::invalid_argument("range_nlm: the active mask must have one entry per point");
-  offsets.assign(center.size(), 0.0f);
+  // Both evaluations write every element.
+  offsets.resize(center.size());
   threads = detail::resolveThreads(threads);
   if (evaluation == Evaluation::direct)
     detail::computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
   else
-    detail::computeOffsetsFast(center, normals, frames, search_window, patch_size, threads, active, offsets);
+    detail::computeOffsetsFast(center, normals, frames, search_window, patch_size, threads, active, offsets,
+                               planes);
+}
+
+void
+detail::copyGrid(const Grid& from, Grid& to, int threads)
+{
+  if (&from == &to)
+    return;
+  const std::size_t n = from.size();
+  to.width = from.width;
+  to.height = from.height;
+  to.x.resize(n);
+  to.y.resize(n);
+  to.z.resize(n);
+  to.valid.resize(n);
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+  // Blocks of 4096 points: whole cache lines of every array per iteration.
+  const std::ptrdiff_t block = 4096;
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(resolveThreads(threads))
+  for (std::ptrdiff_t b = 0; b < (size + block - 1) / block; ++b) {
+    const std::ptrdiff_t lo = b * block, count = std::min(block, size - lo);
+    std::copy_n(&from.x[lo], count, &to.x[lo]);
+    std::copy_n(&from.y[lo], count, &to.y[lo]);
+    std::copy_n(&from.z[lo], count, &to.z[lo]);
+    std::copy_n(&from.valid[lo], count, &to.valid[lo]);
+  }
 }
 
 void
@@ -137,6 +176,15 @@ FilterRun
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active)
 {
+  Workspace workspace;
+  runFilter(frames, center, parameters, viewpoint, active, workspace);
+  return std::move(workspace.run);
+}
+
+void
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
+{
   if (frames.empty() || center < 0 || center >= static_cast<int>(frames.size()) || !frames[center])
     throw std::invalid_argument("range_nlm: the current frame index is outside the frame list");
   const Grid& input = *frames[center];
@@ -158,8 +206,10 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   // OpenMP treats num_threads(0) as an error; map 0 to the runtime's default.
   const int threads = detail::resolveThreads(parameters.threads);
 
-  FilterRun run;
-  run.output = input;
+  FilterRun& run = workspace.run;
+  detail::copyGrid(input, run.output, threads);
+  run.bandwidths.clear();
+  run.frame_weights.clear();
   const int count = static_cast<int>(frames.size());
 
   const bool adaptive = parameters.bandwidth_model == BandwidthModel::range_adaptive;
@@ -199,10 +249,13 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       b.mu_d = profiles[k].extentAt(rho_median) * rho_median;
       bandwidths[k] = finishBandwidths(b, parameters);
     } else {
-      const NormalField own = normals ? NormalField() : estimateNormals(g, parameters.normal_window, viewpoint, threads);
-      bandwidths[k] = finishBandwidths(
-          estimateBandwidths(g, normals ? *normals : own, parameters.search_window, parameters.bandwidth_samples, seed),
-          parameters);
+      // A neighbour's normals go into the centre frame's buffer, which is filled afterwards.
+      if (!normals)
+        detail::estimateNormalsGated(g, parameters.normal_window, viewpoint, threads, {}, 0, workspace.normals,
+                                     workspace.normal_planes);
+      bandwidths[k] = finishBandwidths(estimateBandwidths(g, normals ? *normals : workspace.normals,
+                                                          parameters.search_window, parameters.bandwidth_samples, seed),
+                                       parameters);
     }
   };
 
@@ -219,16 +272,17 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     }
   }
 
-  std::vector<float> offsets;
+  std::vector<float>& offsets = workspace.offsets;
+  NormalField& normals = workspace.normals;
   std::vector<std::vector<float>> inverse_d2(count), inverse_s2(count);
   for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
     const Grid& current = run.output;
     const std::vector<float> rho = adaptive ? rangesOf(current) : std::vector<float>();
-    NormalField normals;
     if (adaptive) {
       estimateFrame(center, current, nullptr, medianRange(current, rho));
     } else {
-      normals = estimateNormals(current, parameters.normal_window, viewpoint, threads);
+      detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, {}, 0, normals,
+                                   workspace.normal_planes);
       estimateFrame(center, current, &normals, 0.0f);
     }
     auto gateFor = [&](const std::vector<float>& sig) {
@@ -242,8 +296,13 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       return gate;
     };
     // Local noise sigma of every centre point: for the pre-smoothing and the displacement limit.
-    std::vector<float> sigma(n, bandwidths[center].similarity);
-    if (adaptive) {
+    std::vector<float>& sigma = workspace.sigma;
+    sigma.resize(n);
+    if (!adaptive) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        sigma[i] = bandwidths[center].similarity;
+    } else {
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         sigma[i] = current.valid[i] ? parameters.similarity_scale * profiles[center].sigmaAt(rho[i]) : 0.0f;
@@ -254,9 +313,13 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       for (std::size_t i = 0; i < n; ++i)
         range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
       const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
-      normals = estimateNormals(smooth, parameters.normal_window, viewpoint, threads, gateFor(sigma));
+      const std::vector<float> gate = gateFor(sigma);
+      detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
+                                   normals, workspace.normal_planes);
     } else if (adaptive) {
-      normals = estimateNormals(current, parameters.normal_window, viewpoint, threads, gateFor(sigma));
+      const std::vector<float> gate = gateFor(sigma);
+      detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
+                                   normals, workspace.normal_planes);
     }
 
     float s_max = 0.0f;
@@ -294,19 +357,20 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       run.bandwidths = bandwidths;
       run.frame_weights = weights;
     }
-    computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
-                   parameters.evaluation, threads, active, offsets);
-    std::vector<float> limit;
+    detail::computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
+                           parameters.evaluation, threads, active, offsets, workspace.window_planes);
+    std::vector<float>& limit = workspace.limit;
     if (parameters.max_displacement > 0.0f) {
       limit.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         limit[i] = parameters.max_displacement * sigma[i];
+    } else {
+      limit.clear();
     }
     applyOffsets(run.output, normals, offsets, parameters.displacement, viewpoint, limit,
                  parameters.line_of_sight_min_cos);
   }
-  return run;
 }
 
 } // namespace range_nlm

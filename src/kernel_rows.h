@@ -83,6 +83,12 @@ void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets);
+/// The same with the padded frames in `planes` (resized as needed).
+void
+computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
+                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets,
+                       std::vector<float>& planes);
 
 /// Whether this CPU runs the AVX-512 (F, VL, DQ, BW) kernels; RANGE_NLM_NO_AVX512 in the
 /// environment turns them off (for comparisons).

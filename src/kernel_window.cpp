@@ -31,16 +31,24 @@ struct NanPaddedFrame
 {
   int pad = 0;
   std::ptrdiff_t stride = 0;
-  std::unique_ptr<float[]> x, y, z;
+  float *x, *y, *z;
 
-  NanPaddedFrame(const Grid& g, int pad_, std::ptrdiff_t stride_, int threads) : pad(pad_), stride(stride_)
+  /// Floats of one plane: one row more than the padded frame, since the last vectors of the
+  /// last row may read past its end.
+  static std::size_t planeSize(const Grid& g, int pad, std::ptrdiff_t stride)
+  {
+    return static_cast<std::size_t>(stride) * (g.height + 2 * pad + 1);
+  }
+
+  /// Writes the three planes at `base` (3 planeSize() floats).
+  NanPaddedFrame(const Grid& g, int pad_, std::ptrdiff_t stride_, int threads, float* base)
+    : pad(pad_), stride(stride_)
   {
     const int rows = g.height + 2 * pad;
-    // One row more than the frame: the last vectors of the last row may read past its end.
-    const std::size_t n = static_cast<std::size_t>(stride) * (rows + 1);
-    x.reset(new float[n]);
-    y.reset(new float[n]);
-    z.reset(new float[n]);
+    const std::size_t n = planeSize(g, pad, stride);
+    x = base;
+    y = base + n;
+    z = base + 2 * n;
     const float nan = std::numeric_limits<float>::quiet_NaN();
     (void)threads;
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -82,6 +90,17 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets)
 {
+  std::vector<float> planes;
+  computeOffsetsWindowed(kernels, center, normals, frames, search_window, patch_size, threads, active, offsets,
+                         planes);
+}
+
+void
+computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
+                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets,
+                       std::vector<float>& planes_storage)
+{
   const int width = center.width;
   const int height = center.height;
   const int lane_width = laneWidth(width);
@@ -90,14 +109,22 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
   // vector: lane_width, then the search window plus the patch; 8 more keep every read inside.
   const std::ptrdiff_t stride = reach + lane_width + search_window + patch_size + 8;
 
-  const NanPaddedFrame padded_center(center, reach, stride, threads);
+  // The centre frame, then every other frame, 3 planes each, in one buffer.
+  const std::size_t plane_size = NanPaddedFrame::planeSize(center, reach, stride);
+  std::size_t padded_count = 1;
+  for (const FrameTerm& term : frames)
+    padded_count += term.grid != &center ? 1 : 0;
+  planes_storage.resize(3 * plane_size * padded_count);
+  float* next = planes_storage.data();
+  const NanPaddedFrame padded_center(center, reach, stride, threads, next);
   std::vector<std::unique_ptr<NanPaddedFrame>> padded(frames.size());
   std::vector<WindowPlane> planes(frames.size());
   for (std::size_t f = 0; f < frames.size(); ++f) {
     const FrameTerm& term = frames[f];
     const NanPaddedFrame* p = &padded_center;
     if (term.grid != &center) {
-      padded[f] = std::make_unique<NanPaddedFrame>(*term.grid, reach, stride, threads);
+      next += 3 * plane_size;
+      padded[f] = std::make_unique<NanPaddedFrame>(*term.grid, reach, stride, threads, next);
       p = padded[f].get();
     }
     WindowPlane& w = planes[f];
@@ -177,9 +204,10 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                    int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                   std::vector<float>& offsets)
+                   std::vector<float>& offsets, std::vector<float>& planes)
 {
-  computeOffsetsWindowed(rowKernels(), center, normals, frames, search_window, patch_size, threads, active, offsets);
+  computeOffsetsWindowed(rowKernels(), center, normals, frames, search_window, patch_size, threads, active, offsets,
+                         planes);
 }
 
 } // namespace detail

@@ -36,14 +36,24 @@ namespace
 struct PaddedGrid
 {
   int border, stride;
-  std::unique_ptr<float[]> x, y, z, f, rho;
-  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint, int threads)
+  std::unique_ptr<float[]> own;
+  float *x, *y, *z, *f, *rho;
+  /// The planes live in `storage` if given (resized as needed, so that repeated calls reuse
+  /// it), else in memory of their own.
+  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint, int threads, std::vector<float>* storage = nullptr)
       : border(r), stride(g.width + 2 * r)
   {
     const int rows = g.height + 2 * r;
     const std::size_t n = static_cast<std::size_t>(stride) * rows;
-    x.reset(new float[n]), y.reset(new float[n]), z.reset(new float[n]), f.reset(new float[n]);
-    rho.reset(new float[n]);
+    float* base = nullptr;
+    if (storage) {
+      storage->resize(5 * n);
+      base = storage->data();
+    } else {
+      own.reset(new float[5 * n]);
+      base = own.get();
+    }
+    x = base, y = base + n, z = base + 2 * n, f = base + 3 * n, rho = base + 4 * n;
     (void)threads;
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int pv = 0; pv < rows; ++pv) {
@@ -86,9 +96,9 @@ struct PaddedGrid
 
 /// One pass of estimateNormalsGated over an already padded grid; `first` is pass 1's result
 /// (pass 2 only).
-NormalField
+void
 fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint& viewpoint, int threads,
-           const std::vector<float>& gate, int pass, const NormalField* first)
+           const std::vector<float>& gate, int pass, const NormalField* first, NormalField& normals)
 {
   const bool range_gated = pass == 1;
   const bool plane_gated = pass == 2;
@@ -97,7 +107,6 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
   const PlaneFitKernels& fits = planeFitKernels();
   const float view[3] = {viewpoint[0], viewpoint[1], viewpoint[2]};
   // Every element is written below (the plane fit covers whole rows).
-  NormalField normals;
   normals.nx.resize(grid.size());
   normals.ny.resize(grid.size());
   normals.nz.resize(grid.size());
@@ -132,7 +141,6 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
                    &normals.ny[row], &normals.nz[row]);
     }
   }
-  return normals;
 }
 } // namespace
 
@@ -140,17 +148,29 @@ NormalField
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
                      const std::vector<float>& gate, int pass)
 {
+  NormalField normals;
+  std::vector<float> planes;
+  estimateNormalsGated(grid, window, viewpoint, threads, gate, pass, normals, planes);
+  return normals;
+}
+
+void
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>& planes)
+{
   // Pass 1 (range gate): neighbours whose range differs from p_i's by more than gate[i] are left
   // out: no fit across a depth edge, but on steep slopes few neighbours remain. Pass 2 (plane
   // gate): neighbours farther than gate[i] from pass 1's plane through p_i are left out: the
   // slope is followed and the edge still excluded. Both passes share one padded grid.
   threads = detail::resolveThreads(threads);
-  const PaddedGrid pad(grid, window / 2, viewpoint, threads);
+  const PaddedGrid pad(grid, window / 2, viewpoint, threads, &planes);
   if (pass == 2) {
-    const NormalField first = fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr);
-    return fitNormals(grid, pad, window, viewpoint, threads, gate, 2, &first);
+    NormalField first;
+    fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr, first);
+    fitNormals(grid, pad, window, viewpoint, threads, gate, 2, &first, normals);
+    return;
   }
-  return fitNormals(grid, pad, window, viewpoint, threads, gate, pass, nullptr);
+  fitNormals(grid, pad, window, viewpoint, threads, gate, pass, nullptr, normals);
 }
 
 } // namespace detail

@@ -132,6 +132,28 @@ FilterRun
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active);
 
+/// The buffers of a filter run, kept between runs (each filter object owns one). Runs on frames
+/// of one size then reuse memory that is already mapped: allocating and first touching the
+/// ~40 MB a VGA frame passes through cost about a sixth of the frame's time. Holds the last run's
+/// result and intermediates; its contents are not part of the interface.
+struct Workspace
+{
+  /// The input frames as grids (filled by the pcl::Filter adaptors).
+  std::vector<Grid> inputs;
+  /// The last run's result.
+  FilterRun run;
+  NormalField normals;
+  std::vector<float> offsets, sigma, limit;
+  /// Padded planes of the normal fits and of the windowed evaluation.
+  std::vector<float> normal_planes, window_planes;
+};
+
+/// runFilter with the result in `workspace.run` and every frame-sized buffer taken from
+/// `workspace` (`frames` may point into workspace.inputs).
+void
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
+
 namespace detail
 {
 /// exp(x) for x <= 0, accurate to a few ulp, vectorizable; exp(x) = 0 below -87.
@@ -144,6 +166,19 @@ inverseSquare(float bandwidth);
 NormalField
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
                      const std::vector<float>& gate, int pass);
+/// The same into `normals`, with the padded planes in `planes` (both resized as needed).
+void
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>& planes);
+/// computeOffsets with the padded frames of the windowed evaluation in `planes` (resized as
+/// needed; the direct evaluation does not use it).
+void
+computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+               int search_window, int patch_size, Evaluation evaluation, int threads,
+               const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>& planes);
+/// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
+void
+copyGrid(const Grid& from, Grid& to, int threads);
 /// Thread count for OpenMP: `threads` if > 0, else the runtime's default (1 without OpenMP).
 int
 resolveThreads(int threads);

@@ -41,6 +41,8 @@ protected:
   void applyFilter(PointCloud& output) override;
 
   Bandwidths bandwidths_;
+  /// Buffers kept between filter() calls (frames of one size reuse them).
+  Workspace workspace_;
 };
 
 /// Adapter helpers shared by the filters (PCL cloud <-> kernel grid).
@@ -51,6 +53,10 @@ namespace detail
 template <typename PointT>
 Grid
 toGrid(const pcl::PointCloud<PointT>& cloud, const char* what = "input cloud");
+/// The same into `grid`, reusing its storage when it has the cloud's size.
+template <typename PointT>
+void
+toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what = "input cloud");
 /// Active mask from PCL indices (empty = all points); throws on an out-of-range index.
 std::vector<unsigned char>
 activeMask(const pcl::Indices* indices, std::size_t size, bool use_indices);

@@ -35,6 +35,13 @@ public:
   /// null.
   void setFrames(const std::deque<PointCloudConstPtr>& frames, std::size_t current);
   const std::deque<PointCloudConstPtr>& getFrames() const { return frames_; }
+  /// Lets go of the frames and the input cloud (the filter's buffers stay for the next call).
+  void clearFrames()
+  {
+    frames_.clear();
+    current_ = 0;
+    this->input_.reset();
+  }
   std::size_t getCurrentFrameIndex() const { return current_; }
 
   /// Psi_k = Psi_dk * Psi_sk per frame of the last filter() call (0 for an all-NaN neighbour).
@@ -49,6 +56,8 @@ protected:
   std::size_t current_ = 0;
   std::vector<float> frame_weights_;
   std::vector<Bandwidths> frame_bandwidths_;
+  /// Buffers kept between filter() calls (frames of one size reuse them).
+  Workspace workspace_;
 };
 
 } // namespace range_nlm

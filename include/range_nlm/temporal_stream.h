@@ -4,6 +4,7 @@
 
 #include <range_nlm/kernel.h>
 #include <range_nlm/parameters.h>
+#include <range_nlm/temporal_nonlocal_means_filter.h>
 
 #include <pcl/point_cloud.h>
 
@@ -55,6 +56,8 @@ private:
   std::size_t emitted_ = 0;
   std::vector<float> last_weights_;
   Bandwidths last_bandwidths_;
+  /// One filter for the whole sequence, so that its buffers are reused from frame to frame.
+  TemporalNonLocalMeansFilter<PointT> filter_;
 };
 
 /// Batch form: filters a whole sequence with the same windows as TemporalStream.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -14,8 +15,8 @@ namespace detail
 {
 
 template <typename PointT>
-Grid
-toGrid(const pcl::PointCloud<PointT>& cloud, const char* what)
+void
+toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what)
 {
   if (!cloud.isOrganized() || cloud.width == 0 || cloud.height == 0) {
     std::ostringstream msg;
@@ -23,17 +24,26 @@ toGrid(const pcl::PointCloud<PointT>& cloud, const char* what)
         << cloud.height << "); the filter needs a grid such as a depth-camera frame";
     throw std::invalid_argument(msg.str());
   }
-  Grid grid(static_cast<int>(cloud.width), static_cast<int>(cloud.height));
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(cloud.size());
+  grid.width = static_cast<int>(cloud.width);
+  grid.height = static_cast<int>(cloud.height);
+  // Every element is written below: resizing to the size it already has costs nothing.
+  grid.x.resize(n);
+  grid.y.resize(n);
+  grid.z.resize(n);
+  grid.valid.resize(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
   std::ptrdiff_t first_infinite = n;
 #pragma omp parallel for schedule(static) reduction(min : first_infinite)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const PointT& p = cloud[i];
     if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
       first_infinite = std::min(first_infinite, i);
-    grid.x[i] = p.x;
-    grid.y[i] = p.y;
-    grid.z[i] = p.z;
+    const bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    grid.x[i] = ok ? p.x : nan;
+    grid.y[i] = ok ? p.y : nan;
+    grid.z[i] = ok ? p.z : nan;
+    grid.valid[i] = ok ? 1 : 0;
   }
   if (first_infinite < n) {
     std::ostringstream msg;
@@ -41,7 +51,14 @@ toGrid(const pcl::PointCloud<PointT>& cloud, const char* what)
         << ", " << first_infinite / cloud.width << "); invalid points must be NaN";
     throw std::invalid_argument(msg.str());
   }
-  grid.updateValidity();
+}
+
+template <typename PointT>
+Grid
+toGrid(const pcl::PointCloud<PointT>& cloud, const char* what)
+{
+  Grid grid;
+  toGrid(cloud, grid, what);
   return grid;
 }
 
@@ -49,13 +66,27 @@ template <typename PointT>
 void
 fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud<PointT>& output)
 {
-  if (&output != &input)
-    output = input;
+  // An output of the input's size (a filter called again) keeps its storage; its points are
+  // copied below, in parallel, together with the new coordinates.
+  const bool copy_points = &output != &input && output.size() == input.size();
+  if (&output != &input) {
+    if (copy_points) {
+      output.header = input.header;
+      output.width = input.width;
+      output.height = input.height;
+      output.sensor_origin_ = input.sensor_origin_;
+      output.sensor_orientation_ = input.sensor_orientation_;
+    } else {
+      output = input;
+    }
+  }
   bool dense = true;
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(output.size());
 #pragma omp parallel for schedule(static) reduction(&& : dense)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     PointT& p = output[i];
+    if (copy_points)
+      p = input[i];
     p.x = grid.x[i];
     p.y = grid.y[i];
     p.z = grid.z[i];
@@ -71,13 +102,14 @@ void
 NonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
 {
   const PointCloud& input = *this->input_;
-  const Grid grid = detail::toGrid(input);
+  workspace_.inputs.resize(1);
+  detail::toGrid(input, workspace_.inputs[0]);
   const std::vector<unsigned char> active =
       detail::activeMask(this->indices_.get(), input.size(), this->use_indices_ && !this->fake_indices_);
   const Viewpoint viewpoint{input.sensor_origin_[0], input.sensor_origin_[1], input.sensor_origin_[2]};
-  const FilterRun run = runFilter({&grid}, 0, parameters_, viewpoint, active);
-  bandwidths_ = run.bandwidths.front();
-  detail::fromGrid(input, run.output, output);
+  runFilter({&workspace_.inputs[0]}, 0, parameters_, viewpoint, active, workspace_);
+  bandwidths_ = workspace_.run.bandwidths.front();
+  detail::fromGrid(input, workspace_.run.output, output);
 }
 
 } // namespace range_nlm

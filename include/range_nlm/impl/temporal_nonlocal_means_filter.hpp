@@ -32,28 +32,29 @@ TemporalNonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
   const PointCloud& input = *this->input_;
   // Without setFrames (or after setInputCloud with another cloud) the window is the input alone.
   const bool own_window = !frames_.empty() && frames_[current_].get() == &input;
-  std::vector<Grid> grids;
-  std::vector<const Grid*> pointers;
+  std::vector<Grid>& grids = workspace_.inputs;
   int center = 0;
   if (own_window) {
-    grids.reserve(frames_.size());
+    grids.resize(frames_.size());
     for (std::size_t k = 0; k < frames_.size(); ++k) {
       const std::string what = "frame " + std::to_string(k) + " of the temporal window";
-      grids.push_back(detail::toGrid(*frames_[k], what.c_str()));
+      detail::toGrid(*frames_[k], grids[k], what.c_str());
     }
     center = static_cast<int>(current_);
   } else {
-    grids.push_back(detail::toGrid(input));
+    grids.resize(1);
+    detail::toGrid(input, grids[0]);
   }
+  std::vector<const Grid*> pointers;
   for (const Grid& g : grids)
     pointers.push_back(&g);
   const std::vector<unsigned char> active =
       detail::activeMask(this->indices_.get(), input.size(), this->use_indices_ && !this->fake_indices_);
   const Viewpoint viewpoint{input.sensor_origin_[0], input.sensor_origin_[1], input.sensor_origin_[2]};
-  const FilterRun run = runFilter(pointers, center, parameters_, viewpoint, active);
-  frame_weights_ = run.frame_weights;
-  frame_bandwidths_ = run.bandwidths;
-  detail::fromGrid(input, run.output, output);
+  runFilter(pointers, center, parameters_, viewpoint, active, workspace_);
+  frame_weights_ = workspace_.run.frame_weights;
+  frame_bandwidths_ = workspace_.run.bandwidths;
+  detail::fromGrid(input, workspace_.run.output, output);
 }
 
 } // namespace range_nlm

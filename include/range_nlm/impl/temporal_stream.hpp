@@ -29,13 +29,14 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   std::deque<CloudConstPtr> frames;
   for (std::size_t k = std::max(lo, first_); k <= hi; ++k)
     frames.push_back(window_[k - first_]);
-  TemporalNonLocalMeansFilter<PointT> filter;
-  filter.setParameters(parameters_);
-  filter.setFrames(frames, t - std::max(lo, first_));
+  filter_.setParameters(parameters_);
+  filter_.setFrames(frames, t - std::max(lo, first_));
   CloudPtr out(new PointCloud);
-  filter.filter(*out);
-  last_weights_ = filter.getFrameWeights();
-  last_bandwidths_ = filter.getFrameBandwidths()[t - std::max(lo, first_)];
+  filter_.filter(*out);
+  // The window alone decides which frames stay in memory.
+  filter_.clearFrames();
+  last_weights_ = filter_.getFrameWeights();
+  last_bandwidths_ = filter_.getFrameBandwidths()[t - std::max(lo, first_)];
   return out;
 }
 
