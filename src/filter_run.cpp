@@ -8,6 +8,7 @@
 #include <omp.h>
 #endif
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -110,6 +111,29 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
              float min_cos)
 {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(grid.size());
+  if (displacement == Displacement::normal) {
+    // Branch-free, so that it vectorizes: points that do not move keep their coordinates.
+    float* __restrict x = grid.x.data();
+    float* __restrict y = grid.y.data();
+    float* __restrict z = grid.z.data();
+    const unsigned char* __restrict valid = grid.valid.data();
+    const float* __restrict nx = normals.nx.data();
+    const float* __restrict ny = normals.ny.data();
+    const float* __restrict nz = normals.nz.data();
+    const float* __restrict hs = offsets.data();
+    const float* __restrict bound = limit.empty() ? nullptr : limit.data();
+#pragma omp parallel for simd schedule(static)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      float h = hs[i];
+      if (bound)
+        h = std::min(std::max(h, -bound[i]), bound[i]);
+      const bool move = valid[i] != 0 && h != 0.0f && std::fabs(h) <= std::numeric_limits<float>::max();
+      x[i] = move ? x[i] - h * nx[i] : x[i];
+      y[i] = move ? y[i] - h * ny[i] : y[i];
+      z[i] = move ? z[i] - h * nz[i] : z[i];
+    }
+    return;
+  }
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     float h = offsets[i];
@@ -118,12 +142,6 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
     if (!grid.valid[i] || h == 0.0f || !std::isfinite(h))
       continue;
     const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
-    if (displacement == Displacement::normal) {
-      grid.x[i] -= h * nx;
-      grid.y[i] -= h * ny;
-      grid.z[i] -= h * nz;
-      continue;
-    }
     // Stay on the camera ray and land on the plane (q - p) . n = -h.
     float vx = grid.x[i] - viewpoint[0], vy = grid.y[i] - viewpoint[1], vz = grid.z[i] - viewpoint[2];
     const float len = std::sqrt(vx * vx + vy * vy + vz * vz);

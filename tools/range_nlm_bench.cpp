@@ -430,13 +430,6 @@ viewpointOf(const Cloud& cloud)
   return Viewpoint{cloud.sensor_origin_[0], cloud.sensor_origin_[1], cloud.sensor_origin_[2]};
 }
 
-Grid
-gridOf(const Cloud& cloud)
-{
-  return Grid::fromInterleaved(&cloud.points.front().x, static_cast<int>(cloud.width),
-                               static_cast<int>(cloud.height), sizeof(pcl::PointXYZ) / sizeof(float));
-}
-
 Bandwidths
 scaled(Bandwidths b, const FilterParameters& p)
 {
@@ -456,6 +449,9 @@ struct PipelineState
   NormalField normals;
   Grid smooth, moved;
   std::vector<FrameTerm> terms;
+  /// Padded planes of the normal fits and of the windowed evaluation, kept between rounds as a
+  /// filter's Workspace keeps them.
+  std::vector<float> normal_planes, window_planes;
 };
 
 /// The steps of one filter iteration (plus the once-per-call setup) for `frames` with `p`,
@@ -501,23 +497,24 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
       b.mu_d = st->profiles[k].extentAt(rho_median) * rho_median;
       st->bandwidths[k] = scaled(b, p);
     } else {
-      const NormalField own =
-          normals ? NormalField() : estimateNormals(g, p.normal_window, viewpoint, p.threads);
-      st->bandwidths[k] = scaled(
-          estimateBandwidths(g, normals ? *normals : own, p.search_window, p.bandwidth_samples, seedOf(k)),
-          p);
+      if (!normals)
+        detail::estimateNormalsGated(g, p.normal_window, viewpoint, p.threads, {}, 0, st->normals,
+                                     st->normal_planes);
+      st->bandwidths[k] = scaled(estimateBandwidths(g, normals ? *normals : st->normals, p.search_window,
+                                                    p.bandwidth_samples, seedOf(k)),
+                                 p);
     }
   };
 
   std::vector<Step> steps;
-  steps.push_back({"cloud -> Grid (Grid::fromInterleaved)" + nf, false, true, false, [=] {
+  steps.push_back({"cloud -> Grid (detail::toGrid)" + nf, false, true, false, [=] {
                      st->grids.resize(count);
                      st->bandwidths.assign(count, Bandwidths());
                      st->profiles.assign(count, NoiseProfile());
                      st->inverse_d2.assign(count, {});
                      st->inverse_s2.assign(count, {});
                      for (std::size_t k = 0; k < count; ++k)
-                       st->grids[k] = gridOf(*frames.clouds[k]);
+                       detail::toGrid(*frames.clouds[k], st->grids[k]);
                    }});
   if (temporal)
     steps.push_back({std::string("neighbour frames: ") +
@@ -539,7 +536,8 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
   } else {
     steps.push_back({"estimateNormals " + nw + ", raw points", true, true, false, [=] {
                        rangesOf(st->grids[c], st->rho);
-                       st->normals = estimateNormals(st->grids[c], p.normal_window, viewpoint, p.threads);
+                       detail::estimateNormalsGated(st->grids[c], p.normal_window, viewpoint, p.threads, {}, 0,
+                                                    st->normals, st->normal_planes);
                      }});
     steps.push_back({"estimateBandwidths, " + std::to_string(p.bandwidth_samples) + " samples", true, true,
                      false, [=] { estimateFrame(c, &st->normals, 0.0f); }});
@@ -571,13 +569,14 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
     steps.push_back(
         {"estimateNormals " + nw + (p.normal_edge_gate > 0.0f ? " gated" : "") + ", pre-smoothed copy", true,
          true, false, [=] {
-           st->normals = estimateNormals(st->smooth, p.normal_window, viewpoint, p.threads, st->gate);
+           detail::estimateNormalsGated(st->smooth, p.normal_window, viewpoint, p.threads, st->gate,
+                                        st->gate.empty() ? 0 : 2, st->normals, st->normal_planes);
          }});
   } else if (adaptive) {
     steps.push_back({"estimateNormals " + nw + (p.normal_edge_gate > 0.0f ? " gated" : "") + ", raw points",
                      true, true, false, [=] {
-                       st->normals =
-                           estimateNormals(st->grids[c], p.normal_window, viewpoint, p.threads, st->gate);
+                       detail::estimateNormalsGated(st->grids[c], p.normal_window, viewpoint, p.threads, st->gate,
+                                                    st->gate.empty() ? 0 : 2, st->normals, st->normal_planes);
                      }});
   }
   steps.push_back({std::string("frame terms") + (adaptive ? " and per-point 1/d^2, 1/s^2 maps" : ""), true,
@@ -612,9 +611,11 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
                    }});
   const std::vector<unsigned char> all_active;
   steps.push_back({"computeOffsets fast " + window + nf, true, true, false, [=] {
-                     computeOffsets(st->grids[c], st->normals, st->terms, p.search_window, p.patch_size,
-                                    Evaluation::fast, p.threads, all_active, st->offsets);
-                     st->moved = st->grids[c]; // the copy applyOffsets moves, outside its timing
+                     detail::computeOffsets(st->grids[c], st->normals, st->terms, p.search_window, p.patch_size,
+                                            Evaluation::fast, p.threads, all_active, st->offsets,
+                                            st->window_planes);
+                     // The copy applyOffsets moves, outside its timing.
+                     detail::copyGrid(st->grids[c], st->moved, p.threads);
                      st->limit.clear();
                      if (p.max_displacement > 0.0f) {
                        st->limit.resize(st->sigma.size());
