@@ -275,6 +275,62 @@ TEST(NonLocalMeansFilter, InPlaceEqualsOutOfPlace)
   EXPECT_EQ(cloud->height, in.height);
 }
 
+TEST(NonLocalMeansFilter, AFilterCalledAgainGivesWhatAFreshFilterGives)
+{
+  // One filter object and one output cloud for a sequence of clouds of changing sizes (the
+  // filter keeps its buffers between calls, the output its points): every result must equal
+  // that of a fresh filter into a fresh cloud, colours included.
+  using ColourCloud = pcl::PointCloud<pcl::PointXYZRGB>;
+  const auto colourCloud = [](int w, int h, std::uint64_t seed) {
+    Cloud xyz = test::makeCloud(w, h, test::step(w / 2, 1.0, 1.05), 0.004, seed);
+    test::punchHoles(xyz, 0.05, seed + 1);
+    ColourCloud c;
+    c.width = xyz.width;
+    c.height = xyz.height;
+    c.resize(xyz.size());
+    for (std::size_t i = 0; i < xyz.size(); ++i) {
+      c[i].x = xyz[i].x, c[i].y = xyz[i].y, c[i].z = xyz[i].z;
+      c[i].r = static_cast<std::uint8_t>(i * 7 + seed), c[i].g = static_cast<std::uint8_t>(i * 3);
+      c[i].b = static_cast<std::uint8_t>(seed);
+    }
+    c.is_dense = false;
+    return ColourCloud::ConstPtr(new ColourCloud(c));
+  };
+  const auto same = [](const ColourCloud& a, const ColourCloud& b) {
+    if (a.width != b.width || a.height != b.height || a.size() != b.size() || a.is_dense != b.is_dense)
+      return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const bool nan = std::isnan(a[i].z);
+      if (nan != std::isnan(b[i].z) || a[i].rgba != b[i].rgba)
+        return false;
+      if (!nan && (a[i].x != b[i].x || a[i].y != b[i].y || a[i].z != b[i].z))
+        return false;
+    }
+    return true;
+  };
+  NonLocalMeansFilter<pcl::PointXYZRGB> reused;
+  ColourCloud out;
+  // 48 x 40, a smaller cloud, 40 x 48 (the first size again, transposed), the first again.
+  const std::vector<ColourCloud::ConstPtr> clouds{colourCloud(48, 40, 21), colourCloud(30, 20, 22),
+                                                  colourCloud(40, 48, 23), colourCloud(48, 40, 21)};
+  for (std::size_t k = 0; k < clouds.size(); ++k) {
+    reused.setInputCloud(clouds[k]);
+    reused.filter(out);
+    NonLocalMeansFilter<pcl::PointXYZRGB> fresh;
+    fresh.setInputCloud(clouds[k]);
+    ColourCloud expected;
+    fresh.filter(expected);
+    EXPECT_TRUE(same(out, expected)) << "call " << k;
+    std::size_t moved = 0;
+    for (std::size_t i = 0; i < out.size(); ++i)
+      moved += out[i].z != (*clouds[k])[i].z ? 1 : 0; // NaN compares unequal: holes count too
+    std::size_t holes = 0;
+    for (const auto& p : *clouds[k])
+      holes += std::isnan(p.z) ? 1 : 0;
+    EXPECT_GT(moved, holes + out.size() / 2) << "call " << k;
+  }
+}
+
 TEST(NonLocalMeansFilter, ThreadCountDoesNotChangeOutput)
 {
   Cloud in = test::makeCloud(70, 50, test::step(33, 1.0, 1.04), 0.004, 12);
