@@ -35,6 +35,34 @@ inverseSquare(float bandwidth)
   return inverseSquareInline(bandwidth);
 }
 
+/// applyOffsets along the normals for points [0, n), branch-free so that it vectorizes (every
+/// load is unconditional): points that do not move keep their coordinates. With Clamped, h is
+/// clamped to +/- bound[i] first.
+template <bool Clamped>
+void
+moveAlongNormals(float* __restrict x, float* __restrict y, float* __restrict z, const unsigned char* __restrict valid,
+                 const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+                 const float* __restrict hs, const float* __restrict bound, std::ptrdiff_t n)
+{
+  const float largest = std::numeric_limits<float>::max();
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const float raw = hs[i];
+    float h = raw;
+    if constexpr (Clamped) {
+      const float b = bound[i];
+      h = h < -b ? -b : h;
+      h = h > b ? b : h; // NaN stays NaN
+    }
+    const float v = valid[i];
+    const bool moves = (v > 0.0f) & (h != 0.0f) & (std::fabs(h) <= largest);
+    const float px = x[i], py = y[i], pz = z[i];
+    const float qx = px - h * nx[i], qy = py - h * ny[i], qz = pz - h * nz[i];
+    x[i] = moves ? qx : px;
+    y[i] = moves ? qy : py;
+    z[i] = moves ? qz : pz;
+  }
+}
+
 int
 resolveThreads(int threads)
 {
@@ -112,26 +140,12 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
 {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(grid.size());
   if (displacement == Displacement::normal) {
-    // Branch-free, so that it vectorizes: points that do not move keep their coordinates.
-    float* __restrict x = grid.x.data();
-    float* __restrict y = grid.y.data();
-    float* __restrict z = grid.z.data();
-    const unsigned char* __restrict valid = grid.valid.data();
-    const float* __restrict nx = normals.nx.data();
-    const float* __restrict ny = normals.ny.data();
-    const float* __restrict nz = normals.nz.data();
-    const float* __restrict hs = offsets.data();
-    const float* __restrict bound = limit.empty() ? nullptr : limit.data();
-#pragma omp parallel for simd schedule(static)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      float h = hs[i];
-      if (bound)
-        h = std::min(std::max(h, -bound[i]), bound[i]);
-      const bool move = valid[i] != 0 && h != 0.0f && std::fabs(h) <= std::numeric_limits<float>::max();
-      x[i] = move ? x[i] - h * nx[i] : x[i];
-      y[i] = move ? y[i] - h * ny[i] : y[i];
-      z[i] = move ? z[i] - h * nz[i] : z[i];
-    }
+    const auto move = limit.empty() ? detail::moveAlongNormals<false> : detail::moveAlongNormals<true>;
+    const std::ptrdiff_t block = 4096;
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t lo = 0; lo < n; lo += block)
+      move(&grid.x[lo], &grid.y[lo], &grid.z[lo], &grid.valid[lo], &normals.nx[lo], &normals.ny[lo],
+           &normals.nz[lo], &offsets[lo], limit.empty() ? nullptr : &limit[lo], std::min(block, n - lo));
     return;
   }
 #pragma omp parallel for schedule(static)
