@@ -83,6 +83,27 @@ struct NanPaddedFrame
   }
 };
 
+/// The staged row of the windowed evaluation: the normal and active = 1 of points that are
+/// valid, selected and have a finite normal, else zeros. Every load is unconditional, so the
+/// loop vectorizes.
+void
+stageRow(const float* __restrict gx, const float* __restrict gy, const float* __restrict gz,
+         const unsigned char* __restrict valid, const unsigned char* __restrict selected, int width,
+         float* __restrict sx, float* __restrict sy, float* __restrict sz, float* __restrict sa)
+{
+  for (int u = 0; u < width; ++u) {
+    // A NaN normal fails the comparisons (so does an infinite one).
+    const float nx = gx[u], ny = gy[u], nz = gz[u];
+    const float on = valid[u], chosen = selected[u];
+    const bool ok = (on > 0.0f) & (chosen > 0.0f) & (std::fabs(nx) <= 1e30f) & (std::fabs(ny) <= 1e30f) &
+                    (std::fabs(nz) <= 1e30f);
+    sx[u] = ok ? nx : 0.0f;
+    sy[u] = ok ? ny : 0.0f;
+    sz[u] = ok ? nz : 0.0f;
+    sa[u] = ok ? 1.0f : 0.0f;
+  }
+}
+
 } // namespace
 
 void
@@ -169,24 +190,10 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
     for (int v = 0; v < height; ++v) {
       // Stage the row (inactive points: zero normal; past the width: zeros).
       const std::size_t first = static_cast<std::size_t>(v) * width;
-      const float* gx = &normals.nx[first];
-      const float* gy = &normals.ny[first];
-      const float* gz = &normals.nz[first];
+      // (Without a selection every valid point is selected.)
       const unsigned char* valid = &center.valid[first];
-      const unsigned char* selected = active.empty() ? nullptr : &active[first];
-      float* sx = field(0);
-      float* sy = field(1);
-      float* sz = field(2);
-      float* sa = field(3);
-      for (int u = 0; u < width; ++u) {
-        // A NaN normal fails the comparisons (so does an infinite one).
-        const bool ok = valid[u] && (!selected || selected[u]) && std::fabs(gx[u]) <= 1e30f &&
-                        std::fabs(gy[u]) <= 1e30f && std::fabs(gz[u]) <= 1e30f;
-        sx[u] = ok ? gx[u] : 0.0f;
-        sy[u] = ok ? gy[u] : 0.0f;
-        sz[u] = ok ? gz[u] : 0.0f;
-        sa[u] = ok ? 1.0f : 0.0f;
-      }
+      stageRow(&normals.nx[first], &normals.ny[first], &normals.nz[first], valid,
+               active.empty() ? valid : &active[first], width, field(0), field(1), field(2), field(3));
       for (int k = 0; k < 4; ++k)
         std::fill(field(k) + width, field(k) + lane_width, 0.0f);
       for (std::size_t f = 0; f < frame_count; ++f) {
