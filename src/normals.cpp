@@ -37,23 +37,28 @@ struct PaddedGrid
 {
   int border, stride;
   std::unique_ptr<float[]> own;
-  float *x, *y, *z, *f, *rho;
+  float *x, *y, *z, *f;
+  float* rho = nullptr; // only with `ranges`
   /// The planes live in `storage` if given (resized as needed, so that repeated calls reuse
-  /// it), else in memory of their own.
-  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint, int threads, std::vector<float>* storage = nullptr)
+  /// it), else in memory of their own. The ranges are computed only with `ranges`.
+  PaddedGrid(const Grid& g, int r, const Viewpoint& viewpoint, int threads, bool ranges,
+             std::vector<float>* storage = nullptr)
       : border(r), stride(g.width + 2 * r)
   {
     const int rows = g.height + 2 * r;
     const std::size_t n = static_cast<std::size_t>(stride) * rows;
+    const std::size_t planes = ranges ? 5 : 4;
     float* base = nullptr;
     if (storage) {
-      storage->resize(5 * n);
+      storage->resize(planes * n);
       base = storage->data();
     } else {
-      own.reset(new float[5 * n]);
+      own.reset(new float[planes * n]);
       base = own.get();
     }
-    x = base, y = base + n, z = base + 2 * n, f = base + 3 * n, rho = base + 4 * n;
+    x = base, y = base + n, z = base + 2 * n, f = base + 3 * n;
+    if (ranges)
+      rho = base + 4 * n;
     (void)threads;
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int pv = 0; pv < rows; ++pv) {
@@ -61,7 +66,6 @@ struct PaddedGrid
       float* __restrict py = &y[static_cast<std::size_t>(pv) * stride];
       float* __restrict pz = &z[static_cast<std::size_t>(pv) * stride];
       float* __restrict pf = &f[static_cast<std::size_t>(pv) * stride];
-      float* __restrict pr = &rho[static_cast<std::size_t>(pv) * stride];
       const int v = pv - r;
       const bool inside = v >= 0 && v < g.height;
       // Border rows and columns are 0.
@@ -69,25 +73,31 @@ struct PaddedGrid
       const int left = inside ? r : stride; // zero [0, left) and [right, stride)
       const int right = inside ? r + width : stride;
       for (int pu = 0; pu < left; ++pu)
-        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f, pr[pu] = 0.0f;
+        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
       for (int pu = right; pu < stride; ++pu)
-        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f, pr[pu] = 0.0f;
-      if (!inside)
+        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
+      if (inside) {
+        // Interior, branch-free (invalid points hold NaN, replaced by 0).
+        const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
+        const float* __restrict gx = &g.x[i0];
+        const float* __restrict gy = &g.y[i0];
+        const float* __restrict gz = &g.z[i0];
+        const unsigned char* __restrict gv = &g.valid[i0];
+#pragma omp simd
+        for (int u = 0; u < width; ++u) {
+          const bool ok = static_cast<float>(gv[u]) > 0.0f; // (a float compare vectorizes)
+          px[r + u] = ok ? gx[u] : 0.0f, py[r + u] = ok ? gy[u] : 0.0f, pz[r + u] = ok ? gz[u] : 0.0f;
+          pf[r + u] = ok ? 1.0f : 0.0f;
+        }
+      }
+      if (!ranges)
         continue;
-      // Interior, branch-free (invalid points hold NaN, replaced by 0).
-      const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
-      const float* __restrict gx = &g.x[i0];
-      const float* __restrict gy = &g.y[i0];
-      const float* __restrict gz = &g.z[i0];
-      const unsigned char* __restrict gv = &g.valid[i0];
+      float* __restrict pr = &rho[static_cast<std::size_t>(pv) * stride];
       const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
 #pragma omp simd
-      for (int u = 0; u < width; ++u) {
-        const bool ok = static_cast<float>(gv[u]) > 0.0f; // (a float compare vectorizes)
-        const float dx = gx[u] - vx, dy = gy[u] - vy, dz = gz[u] - vz;
-        const float range = std::sqrt(dx * dx + dy * dy + dz * dz);
-        px[r + u] = ok ? gx[u] : 0.0f, py[r + u] = ok ? gy[u] : 0.0f, pz[r + u] = ok ? gz[u] : 0.0f;
-        pf[r + u] = ok ? 1.0f : 0.0f, pr[r + u] = ok ? range : 0.0f;
+      for (int pu = 0; pu < stride; ++pu) {
+        const float dx = px[pu] - vx, dy = py[pu] - vy, dz = pz[pu] - vz;
+        pr[pu] = pf[pu] > 0.0f ? std::sqrt(dx * dx + dy * dy + dz * dz) : 0.0f;
       }
     }
   }
@@ -132,8 +142,11 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
       // All (2r+1)^2 offsets in one call, in the order the row kernel `moments` would take them,
       // with the sums of each block of centres kept in registers (plane_fit.inc).
       const std::size_t c0 = pad.at(0, v);
-      fits.window_moments(&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0], &pad.rho[c0], pad.stride, r, g.data(),
-                          n0x.data(), n0y.data(), n0z.data(), range_gated ? 1.0f : 0.0f, width, acc.data());
+      // (Without a gate every valid neighbour counts: no gate, ranges or first normals.)
+      const bool gated = range_gated || plane_gated;
+      fits.window_moments(&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0], gated ? &pad.rho[c0] : nullptr,
+                          pad.stride, r, gated ? g.data() : nullptr, n0x.data(), n0y.data(), n0z.data(),
+                          range_gated ? 1.0f : 0.0f, width, acc.data());
       // The plane normal is the eigenvector of the smallest eigenvalue of the covariance (in
       // double: with noise close to the pixel spacing the covariance is nearly isotropic and
       // float rounding would decide the normal), a whole row at once (plane_fit.inc).
@@ -163,7 +176,7 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   // gate): neighbours farther than gate[i] from pass 1's plane through p_i are left out: the
   // slope is followed and the edge still excluded. Both passes share one padded grid.
   threads = detail::resolveThreads(threads);
-  const PaddedGrid pad(grid, window / 2, viewpoint, threads, &planes);
+  const PaddedGrid pad(grid, window / 2, viewpoint, threads, pass != 0, &planes);
   if (pass == 2) {
     NormalField first;
     fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr, first);
@@ -188,7 +201,7 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
   threads = detail::resolveThreads(threads);
-  const detail::PaddedGrid pad(grid, r, viewpoint, threads);
+  const detail::PaddedGrid pad(grid, r, viewpoint, threads, true);
   const detail::RowKernels& kernels = detail::rowKernels();
   Grid out = grid;
   (void)threads;

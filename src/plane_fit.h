@@ -34,7 +34,8 @@ struct PlaneFitKernels
   /// order, into acc[k * width + u] (overwritten), but with the ten sums of a block of centres
   /// kept in registers over all offsets. x, y, z, f, rho point to the row's first centre in a
   /// padded SoA grid of row stride `stride` (border >= r on every side); gate, n0x, n0y, n0z and
-  /// range_on as for RowKernels::moments.
+  /// range_on as for RowKernels::moments. A null gate means no gate (every valid neighbour
+  /// counts); rho, n0x, n0y, n0z and range_on are then not read.
   void (*window_moments)(const float* x, const float* y, const float* z, const float* f, const float* rho,
                          std::ptrdiff_t stride, int r, const float* gate, const float* n0x, const float* n0y,
                          const float* n0z, float range_on, int width, float* acc);

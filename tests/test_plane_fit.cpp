@@ -421,6 +421,13 @@ TEST(PlaneFit, WindowMomentsMatchTheRowKernelOverAllOffsets)
               EXPECT_NEAR(g, e, 1e-6f + 1e-5f * std::fabs(e)) << "r " << r << " pass " << pass << " row " << v
                                                                 << " moment " << k << " centre " << c;
             }
+          if (pass == 0) {
+            // No gate at all (a null gate, no ranges, no first normals): the same sums exactly.
+            std::vector<float> ungated(10 * width, -1.0f);
+            kernels->window_moments(&x[c0], &y[c0], &z[c0], &f[c0], nullptr, stride, r, nullptr, nullptr, nullptr,
+                                    nullptr, 0.0f, width, ungated.data());
+            EXPECT_EQ(ungated, got) << "r " << r << " row " << v;
+          }
         }
       }
   }
