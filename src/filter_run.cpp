@@ -239,13 +239,24 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   const int threads = detail::resolveThreads(parameters.threads);
 
   FilterRun& run = workspace.run;
-  detail::copyGrid(input, run.output, threads);
   run.bandwidths.clear();
   run.frame_weights.clear();
   const int count = static_cast<int>(frames.size());
-
   const bool adaptive = parameters.bandwidth_model == BandwidthModel::range_adaptive;
   const std::size_t n = input.size();
+  // The filtered frame starts as the input. A grid of workspace.inputs that no other frame
+  // shares is taken over instead of copied (`input` is not used after this).
+  Grid* own = nullptr;
+  for (Grid& g : workspace.inputs)
+    if (&g == &input)
+      own = &g;
+  for (int k = 0; k < count; ++k)
+    if (k != center && frames[k] == &input)
+      own = nullptr;
+  if (own)
+    std::swap(*own, run.output);
+  else
+    detail::copyGrid(input, run.output, threads);
 
   // Range of every centre point (the per-point bandwidths are functions of it).
   auto rangesOf = [&](const Grid& g) {
@@ -293,7 +304,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
 
   // Neighbour frames are estimated once, from their own data (the range-adaptive model reads
   // their profiles at the centre frame's median range).
-  const float input_rho_median = adaptive && count > 1 ? medianRange(input, rangesOf(input)) : 0.0f;
+  const float input_rho_median = adaptive && count > 1 ? medianRange(run.output, rangesOf(run.output)) : 0.0f;
   for (int k = 0; k < count; ++k) {
     if (k == center)
       continue;

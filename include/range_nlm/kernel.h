@@ -149,7 +149,9 @@ struct Workspace
 };
 
 /// runFilter with the result in `workspace.run` and every frame-sized buffer taken from
-/// `workspace` (`frames` may point into workspace.inputs).
+/// `workspace`. `frames` may point into workspace.inputs; the current frame's grid there is then
+/// taken over as the result's storage (its contents are not kept) unless another frame is the
+/// same grid.
 void
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
