@@ -9,6 +9,21 @@
 
 namespace range_nlm
 {
+namespace
+{
+/// Valid points with a finite normal among `count` (branch-free and with unconditional loads, so
+/// that it vectorizes; a NaN or infinite normal fails the comparison).
+std::size_t
+countCandidates(const unsigned char* __restrict valid, const float* __restrict nx, int count)
+{
+  int found = 0;
+  for (int i = 0; i < count; ++i) {
+    const float on = valid[i], n = nx[i];
+    found += ((on > 0.0f) & (std::fabs(n) <= std::numeric_limits<float>::max())) ? 1 : 0;
+  }
+  return static_cast<std::size_t>(found);
+}
+} // namespace
 
 Bandwidths
 estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
@@ -26,12 +41,9 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
   };
   std::vector<std::size_t> first(blocks + 1, 0); // candidates before each block
 #pragma omp parallel for schedule(static)
-  for (std::size_t b = 0; b < blocks; ++b) {
-    std::size_t count = 0;
-    for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i)
-      count += candidate(i) ? 1 : 0;
-    first[b + 1] = count;
-  }
+  for (std::size_t b = 0; b < blocks; ++b)
+    first[b + 1] = countCandidates(&grid.valid[b * kBlock], &normals.nx[b * kBlock],
+                                   static_cast<int>(std::min(n, (b + 1) * kBlock) - b * kBlock));
   for (std::size_t b = 0; b < blocks; ++b)
     first[b + 1] += first[b];
   const std::size_t candidates = first[blocks];
