@@ -25,6 +25,22 @@ laneWidth(int width)
   return (width + kWindowLanes - 1) / kWindowLanes * kWindowLanes;
 }
 
+/// The points of a row, NaN where invalid. Written as additions of -0 (x + -0 = x for every x,
+/// including -0) or NaN, which GCC vectorizes; it does not if-convert three selects here.
+void
+copyValid(const float* __restrict gx, const float* __restrict gy, const float* __restrict gz,
+          const unsigned char* __restrict valid, int width, float* __restrict x, float* __restrict y,
+          float* __restrict z)
+{
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int u = 0; u < width; ++u) {
+    const float keep = valid[u] > 0 ? -0.0f : nan;
+    x[u] = gx[u] + keep;
+    y[u] = gy[u] + keep;
+    z[u] = gz[u] + keep;
+  }
+}
+
 /// x, y, z of a frame with `pad` NaN pixels above, below and left of it and enough on the right
 /// for the vectors and windows of the last lanes. Written once, in parallel rows.
 struct NanPaddedFrame
@@ -56,19 +72,17 @@ struct NanPaddedFrame
       float* px = &x[static_cast<std::size_t>(row) * stride];
       float* py = &y[static_cast<std::size_t>(row) * stride];
       float* pz = &z[static_cast<std::size_t>(row) * stride];
-      std::fill_n(px, stride, nan);
-      std::fill_n(py, stride, nan);
-      std::fill_n(pz, stride, nan);
       const int v = row - pad;
-      if (v < 0 || v >= g.height)
-        continue;
-      for (int u = 0; u < g.width; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * g.width + u;
-        if (!g.valid[i])
-          continue;
-        px[pad + u] = g.x[i];
-        py[pad + u] = g.y[i];
-        pz[pad + u] = g.z[i];
+      const bool inside = v >= 0 && v < g.height;
+      // NaN in [0, left) and [right, stride); each element is written once.
+      const int left = inside ? pad : static_cast<int>(stride);
+      const int right = inside ? pad + g.width : static_cast<int>(stride);
+      std::fill(px, px + left, nan), std::fill(py, py + left, nan), std::fill(pz, pz + left, nan);
+      std::fill(px + right, px + stride, nan), std::fill(py + right, py + stride, nan);
+      std::fill(pz + right, pz + stride, nan);
+      if (inside) {
+        const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
+        copyValid(&g.x[i0], &g.y[i0], &g.z[i0], &g.valid[i0], g.width, px + pad, py + pad, pz + pad);
       }
     }
   }
