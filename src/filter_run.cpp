@@ -21,7 +21,7 @@ computeOffsetsDirect(const Grid&, const NormalField&, const std::vector<FrameTer
                      const std::vector<unsigned char>&, std::vector<float>&);
 void
 computeOffsetsFast(const Grid&, const NormalField&, const std::vector<FrameTerm>&, int, int, int,
-                   const std::vector<unsigned char>&, std::vector<float>&, std::vector<float>&);
+                   const std::vector<unsigned char>&, std::vector<float>&, std::vector<float>*);
 
 float
 expNonPositive(float x)
@@ -81,16 +81,15 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
                int search_window, int patch_size, Evaluation evaluation, int threads,
                const std::vector<unsigned char>& active, std::vector<float>& offsets)
 {
-  std::vector<float> planes;
   detail::computeOffsets(center, normals, frames, search_window, patch_size, evaluation, threads, active, offsets,
-                         planes);
+                         nullptr);
 }
 
 void
 detail::computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                        int search_window, int patch_size, Evaluation evaluation, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       std::vector<float>& planes)
+                       std::vector<float>* planes)
 {
   for (const FrameTerm& term : frames)
     if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height)
@@ -295,7 +294,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       // A neighbour's normals go into the centre frame's buffer, which is filled afterwards.
       if (!normals)
         detail::estimateNormalsGated(g, parameters.normal_window, viewpoint, threads, {}, 0, workspace.normals,
-                                     workspace.normal_planes);
+                                     &workspace.normal_planes);
       bandwidths[k] = finishBandwidths(estimateBandwidths(g, normals ? *normals : workspace.normals,
                                                           parameters.search_window, parameters.bandwidth_samples, seed),
                                        parameters);
@@ -325,7 +324,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       estimateFrame(center, current, nullptr, medianRange(current, rho));
     } else {
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, {}, 0, normals,
-                                   workspace.normal_planes);
+                                   &workspace.normal_planes);
       estimateFrame(center, current, &normals, 0.0f);
     }
     auto gateFor = [&](const std::vector<float>& sig) {
@@ -358,11 +357,11 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
       const std::vector<float> gate = gateFor(sigma);
       detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
-                                   normals, workspace.normal_planes);
+                                   normals, &workspace.normal_planes);
     } else if (adaptive) {
       const std::vector<float> gate = gateFor(sigma);
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
-                                   normals, workspace.normal_planes);
+                                   normals, &workspace.normal_planes);
     }
 
     float s_max = 0.0f;
@@ -401,7 +400,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       run.frame_weights = weights;
     }
     detail::computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
-                           parameters.evaluation, threads, active, offsets, workspace.window_planes);
+                           parameters.evaluation, threads, active, offsets, &workspace.window_planes);
     std::vector<float>& limit = workspace.limit;
     if (parameters.max_displacement > 0.0f) {
       limit.resize(n);

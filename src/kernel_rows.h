@@ -78,17 +78,13 @@ struct RowKernels
 };
 
 /// The windowed evaluation (computeOffsets' fast path) with the given build of the row kernels;
-/// `offsets` has the size of the grid. For tests; computeOffsets takes rowKernels().
-void
-computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
-                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
-                       const std::vector<unsigned char>& active, std::vector<float>& offsets);
-/// The same with the padded frames in `planes` (resized as needed).
+/// `offsets` has the size of the grid. The padded frames go into `planes` if given (resized as
+/// needed), else into memory of their own. For tests; computeOffsets takes rowKernels().
 void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       std::vector<float>& planes);
+                       std::vector<float>* planes = nullptr);
 
 /// Whether this CPU runs the AVX-512 (F, VL, DQ, BW) kernels; RANGE_NLM_NO_AVX512 in the
 /// environment turns them off (for comparisons).

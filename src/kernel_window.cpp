@@ -123,18 +123,8 @@ stageRow(const float* __restrict gx, const float* __restrict gy, const float* __
 void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
-                       const std::vector<unsigned char>& active, std::vector<float>& offsets)
-{
-  std::vector<float> planes;
-  computeOffsetsWindowed(kernels, center, normals, frames, search_window, patch_size, threads, active, offsets,
-                         planes);
-}
-
-void
-computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
-                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       std::vector<float>& planes_storage)
+                       std::vector<float>* storage)
 {
   const int width = center.width;
   const int height = center.height;
@@ -149,8 +139,15 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
   std::size_t padded_count = 1;
   for (const FrameTerm& term : frames)
     padded_count += term.grid != &center ? 1 : 0;
-  planes_storage.resize(3 * plane_size * padded_count);
-  float* next = planes_storage.data();
+  std::unique_ptr<float[]> own;
+  float* next = nullptr;
+  if (storage) {
+    storage->resize(3 * plane_size * padded_count);
+    next = storage->data();
+  } else {
+    own.reset(new float[3 * plane_size * padded_count]);
+    next = own.get();
+  }
   const NanPaddedFrame padded_center(center, reach, stride, threads, next);
   std::vector<std::unique_ptr<NanPaddedFrame>> padded(frames.size());
   std::vector<WindowPlane> planes(frames.size());
@@ -225,7 +222,7 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                    int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                   std::vector<float>& offsets, std::vector<float>& planes)
+                   std::vector<float>& offsets, std::vector<float>* planes)
 {
   computeOffsetsWindowed(rowKernels(), center, normals, frames, search_window, patch_size, threads, active, offsets,
                          planes);

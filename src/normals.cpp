@@ -162,21 +162,20 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
                      const std::vector<float>& gate, int pass)
 {
   NormalField normals;
-  std::vector<float> planes;
-  estimateNormalsGated(grid, window, viewpoint, threads, gate, pass, normals, planes);
+  estimateNormalsGated(grid, window, viewpoint, threads, gate, pass, normals, nullptr);
   return normals;
 }
 
 void
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
-                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>& planes)
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes)
 {
   // Pass 1 (range gate): neighbours whose range differs from p_i's by more than gate[i] are left
   // out: no fit across a depth edge, but on steep slopes few neighbours remain. Pass 2 (plane
   // gate): neighbours farther than gate[i] from pass 1's plane through p_i are left out: the
   // slope is followed and the edge still excluded. Both passes share one padded grid.
   threads = detail::resolveThreads(threads);
-  const PaddedGrid pad(grid, window / 2, viewpoint, threads, pass != 0, &planes);
+  const PaddedGrid pad(grid, window / 2, viewpoint, threads, pass != 0, planes);
   if (pass == 2) {
     NormalField first;
     fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr, first);

@@ -499,7 +499,7 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
     } else {
       if (!normals)
         detail::estimateNormalsGated(g, p.normal_window, viewpoint, p.threads, {}, 0, st->normals,
-                                     st->normal_planes);
+                                     &st->normal_planes);
       st->bandwidths[k] = scaled(estimateBandwidths(g, normals ? *normals : st->normals, p.search_window,
                                                     p.bandwidth_samples, seedOf(k)),
                                  p);
@@ -537,7 +537,7 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
     steps.push_back({"estimateNormals " + nw + ", raw points", true, true, false, [=] {
                        rangesOf(st->grids[c], st->rho);
                        detail::estimateNormalsGated(st->grids[c], p.normal_window, viewpoint, p.threads, {}, 0,
-                                                    st->normals, st->normal_planes);
+                                                    st->normals, &st->normal_planes);
                      }});
     steps.push_back({"estimateBandwidths, " + std::to_string(p.bandwidth_samples) + " samples", true, true,
                      false, [=] { estimateFrame(c, &st->normals, 0.0f); }});
@@ -570,13 +570,13 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
         {"estimateNormals " + nw + (p.normal_edge_gate > 0.0f ? " gated" : "") + ", pre-smoothed copy", true,
          true, false, [=] {
            detail::estimateNormalsGated(st->smooth, p.normal_window, viewpoint, p.threads, st->gate,
-                                        st->gate.empty() ? 0 : 2, st->normals, st->normal_planes);
+                                        st->gate.empty() ? 0 : 2, st->normals, &st->normal_planes);
          }});
   } else if (adaptive) {
     steps.push_back({"estimateNormals " + nw + (p.normal_edge_gate > 0.0f ? " gated" : "") + ", raw points",
                      true, true, false, [=] {
                        detail::estimateNormalsGated(st->grids[c], p.normal_window, viewpoint, p.threads, st->gate,
-                                                    st->gate.empty() ? 0 : 2, st->normals, st->normal_planes);
+                                                    st->gate.empty() ? 0 : 2, st->normals, &st->normal_planes);
                      }});
   }
   steps.push_back({std::string("frame terms") + (adaptive ? " and per-point 1/d^2, 1/s^2 maps" : ""), true,
@@ -613,7 +613,7 @@ breakdownSteps(const Frames& frames, const FilterParameters& p, bool with_direct
   steps.push_back({"computeOffsets fast " + window + nf, true, true, false, [=] {
                      detail::computeOffsets(st->grids[c], st->normals, st->terms, p.search_window, p.patch_size,
                                             Evaluation::fast, p.threads, all_active, st->offsets,
-                                            st->window_planes);
+                                            &st->window_planes);
                      // The copy applyOffsets moves, outside its timing.
                      detail::copyGrid(st->grids[c], st->moved, p.threads);
                      st->limit.clear();

@@ -168,16 +168,17 @@ inverseSquare(float bandwidth);
 NormalField
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
                      const std::vector<float>& gate, int pass);
-/// The same into `normals`, with the padded planes in `planes` (both resized as needed).
+/// The same into `normals` (resized as needed), with the padded planes in `planes` if given
+/// (resized as needed, so that repeated calls reuse it), else in memory of their own.
 void
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
-                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>& planes);
-/// computeOffsets with the padded frames of the windowed evaluation in `planes` (resized as
-/// needed; the direct evaluation does not use it).
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes);
+/// computeOffsets with the padded frames of the windowed evaluation in `planes` if given (resized
+/// as needed), else in memory of their own; the direct evaluation does not use it.
 void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
-               const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>& planes);
+               const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>* planes);
 /// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
 void
 copyGrid(const Grid& from, Grid& to, int threads);
