@@ -6,6 +6,7 @@
 #include <range_nlm/kernel.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 
@@ -29,6 +30,9 @@ namespace detail
 {
 namespace
 {
+/// The bits of a float, read and written through a type that may alias it.
+typedef std::uint32_t Bits __attribute__((may_alias));
+
 /// A grid copied into a padded SoA layout (border r, invalid points flag 0 and coordinates 0)
 /// with the range of every point, so neighbourhood loops run over contiguous rows without
 /// bounds checks and vectorize. Filled by `threads` threads, one padded row at a time (every
@@ -77,17 +81,22 @@ struct PaddedGrid
       for (int pu = right; pu < stride; ++pu)
         px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
       if (inside) {
-        // Interior, branch-free (invalid points hold NaN, replaced by 0).
+        // Interior (invalid points hold NaN, replaced by 0), branch-free with bit masks: the
+        // compiler turns a select on `valid` into a branch per point.
         const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
-        const float* __restrict gx = &g.x[i0];
-        const float* __restrict gy = &g.y[i0];
-        const float* __restrict gz = &g.z[i0];
+        const Bits* __restrict gx = reinterpret_cast<const Bits*>(&g.x[i0]);
+        const Bits* __restrict gy = reinterpret_cast<const Bits*>(&g.y[i0]);
+        const Bits* __restrict gz = reinterpret_cast<const Bits*>(&g.z[i0]);
         const unsigned char* __restrict gv = &g.valid[i0];
+        Bits* __restrict bx = reinterpret_cast<Bits*>(px + r);
+        Bits* __restrict by = reinterpret_cast<Bits*>(py + r);
+        Bits* __restrict bz = reinterpret_cast<Bits*>(pz + r);
+        Bits* __restrict bf = reinterpret_cast<Bits*>(pf + r);
 #pragma omp simd
         for (int u = 0; u < width; ++u) {
-          const bool ok = static_cast<float>(gv[u]) > 0.0f; // (a float compare vectorizes)
-          px[r + u] = ok ? gx[u] : 0.0f, py[r + u] = ok ? gy[u] : 0.0f, pz[r + u] = ok ? gz[u] : 0.0f;
-          pf[r + u] = ok ? 1.0f : 0.0f;
+          const std::uint32_t keep = 0u - static_cast<std::uint32_t>(gv[u] != 0);
+          bx[u] = gx[u] & keep, by[u] = gy[u] & keep, bz[u] = gz[u] & keep;
+          bf[u] = 0x3f800000u & keep; // 1.0f
         }
       }
       if (!ranges)

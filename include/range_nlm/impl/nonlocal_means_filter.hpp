@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -32,19 +34,43 @@ toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what)
   grid.y.resize(n);
   grid.z.resize(n);
   grid.valid.resize(n);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  std::ptrdiff_t first_infinite = n;
-#pragma omp parallel for schedule(static) reduction(min : first_infinite)
+  // Branch-free on the bits of the coordinates (a branch per point mispredicts wherever valid and
+  // invalid points alternate): |x| below the exponent's all-ones pattern is finite, equal to it is
+  // infinite. The position of an infinity is looked for only once one was seen.
+  const std::uint32_t nan_bits = 0x7fc00000u; // quiet NaN
+  std::uint32_t infinite = 0;
+  float* __restrict gx = grid.x.data();
+  float* __restrict gy = grid.y.data();
+  float* __restrict gz = grid.z.data();
+  unsigned char* __restrict gv = grid.valid.data();
+  const PointT* __restrict points = cloud.points.data();
+#pragma omp parallel for simd schedule(static) reduction(| : infinite)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
-    const PointT& p = cloud[i];
-    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
-      first_infinite = std::min(first_infinite, i);
-    const bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-    grid.x[i] = ok ? p.x : nan;
-    grid.y[i] = ok ? p.y : nan;
-    grid.z[i] = ok ? p.z : nan;
-    grid.valid[i] = ok ? 1 : 0;
+    const PointT& p = points[i];
+    std::uint32_t bx, by, bz;
+    std::memcpy(&bx, &p.x, sizeof bx);
+    std::memcpy(&by, &p.y, sizeof by);
+    std::memcpy(&bz, &p.z, sizeof bz);
+    const std::uint32_t ax = bx & 0x7fffffffu, ay = by & 0x7fffffffu, az = bz & 0x7fffffffu;
+    const std::uint32_t ok = static_cast<std::uint32_t>(ax < 0x7f800000u) & static_cast<std::uint32_t>(ay < 0x7f800000u) &
+                             static_cast<std::uint32_t>(az < 0x7f800000u);
+    infinite |= static_cast<std::uint32_t>(ax == 0x7f800000u) | static_cast<std::uint32_t>(ay == 0x7f800000u) |
+                static_cast<std::uint32_t>(az == 0x7f800000u);
+    const std::uint32_t keep = 0u - ok;
+    bx = (bx & keep) | (nan_bits & ~keep);
+    by = (by & keep) | (nan_bits & ~keep);
+    bz = (bz & keep) | (nan_bits & ~keep);
+    std::memcpy(&gx[i], &bx, sizeof bx);
+    std::memcpy(&gy[i], &by, sizeof by);
+    std::memcpy(&gz[i], &bz, sizeof bz);
+    gv[i] = static_cast<unsigned char>(ok);
   }
+  std::ptrdiff_t first_infinite = n;
+  for (std::ptrdiff_t i = 0; infinite && i < n; ++i)
+    if (std::isinf(cloud[i].x) || std::isinf(cloud[i].y) || std::isinf(cloud[i].z)) {
+      first_infinite = i;
+      break;
+    }
   if (first_infinite < n) {
     std::ostringstream msg;
     msg << "range_nlm: the " << what << " has an infinite coordinate at pixel (" << first_infinite % cloud.width
@@ -80,9 +106,9 @@ fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud
       output = input;
     }
   }
-  bool dense = true;
+  unsigned dense = 1; // (an integer &, not &&: no branch per point)
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(output.size());
-#pragma omp parallel for schedule(static) reduction(&& : dense)
+#pragma omp parallel for schedule(static) reduction(& : dense)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     PointT& p = output[i];
     if (copy_points)
@@ -90,9 +116,9 @@ fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud
     p.x = grid.x[i];
     p.y = grid.y[i];
     p.z = grid.z[i];
-    dense = dense && grid.valid[i];
+    dense &= grid.valid[i];
   }
-  output.is_dense = dense;
+  output.is_dense = dense != 0;
 }
 
 } // namespace detail
