@@ -1,11 +1,24 @@
-// range_nlm_bench end to end: the rows it times and its option checks.
+// range_nlm_bench end to end: the rows it times and its option checks; and the way it times
+// methods in turns (bench_support).
+#include "bench_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <stdexcept>
 #include <string>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 using namespace range_nlm;
+namespace bench = range_nlm::tools::bench;
 
 TEST(BenchTool, NoDirectTimesTheFastPathAndThePeersOnly)
 {
@@ -28,4 +41,69 @@ TEST(BenchTool, RejectsContradictoryDirectOptions)
   const test::CommandResult r = test::runTool("range_nlm_bench", "--all --no-direct");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--all and --no-direct"), std::string::npos) << r.output;
+}
+
+namespace
+{
+/// A method for runInterleaved whose every call appends `letter` to the file at `log` and whose
+/// call number `fail_at` (1-based) fails: by an exception, or by SIGKILL with `kill`.
+bench::TimedMethod
+loggingMethod(const std::string& log, char letter, int runs, bool warmup, int fail_at = 0, bool kill = false)
+{
+  bench::TimedMethod m;
+  m.runs = runs;
+  m.warmup = warmup;
+  m.prepare = [=] {
+    auto calls = std::make_shared<int>(0);
+    return std::function<void()>([=] {
+      const int fd = ::open(log.c_str(), O_WRONLY | O_APPEND);
+      if (fd < 0 || ::write(fd, &letter, 1) != 1)
+        throw std::runtime_error("cannot append to " + log);
+      ::close(fd);
+      if (++*calls == fail_at) {
+        if (kill)
+          ::raise(SIGKILL);
+        throw std::runtime_error(std::string("call ") + std::to_string(fail_at) + " of " + letter + " failed");
+      }
+    });
+  };
+  return m;
+}
+} // namespace
+
+// The methods take turns in the order given, round by round: a turn is the warm-up call (if
+// any) and the timed call. A method that throws or is killed drops out with that reason; the
+// others keep their turns and return a wall and a CPU time per timed call.
+TEST(BenchInterleaving, MethodsTakeTurnsAndAFailureStaysWithItsMethod)
+{
+  const std::string log =
+      (std::filesystem::temp_directory_path() / ("range_nlm_turns_" + std::to_string(::getpid()) + ".log")).string();
+  std::ofstream(log).close();
+  std::vector<bench::TimedMethod> methods{
+    loggingMethod(log, 'A', 3, true), loggingMethod(log, 'B', 2, false),
+    loggingMethod(log, 'C', 2, true), loggingMethod(log, 'D', 2, true, 2, true),
+    loggingMethod(log, 'E', 3, true, 3)};
+  methods[2].prepare = []() -> std::function<void()> { throw std::runtime_error("C cannot be prepared"); };
+  const std::vector<bench::ChildResult> r = bench::runInterleaved(methods);
+  ASSERT_EQ(r.size(), methods.size());
+
+  std::ifstream in(log);
+  const std::string order((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(order, "AABDDEE" "AABE" "AA");
+  ASSERT_TRUE(r[0].ok) << r[0].error;
+  ASSERT_EQ(r[0].values.size(), 6u); // 3 wall times, then 3 CPU times
+  ASSERT_TRUE(r[1].ok) << r[1].error;
+  ASSERT_EQ(r[1].values.size(), 4u);
+  for (int k : {0, 1}) {
+    EXPECT_GT(r[k].peak_rss_bytes, 0u);
+    for (double v : r[k].values)
+      EXPECT_GE(v, 0.0);
+  }
+  EXPECT_FALSE(r[2].ok);
+  EXPECT_EQ(r[2].error, "C cannot be prepared");
+  EXPECT_FALSE(r[3].ok);
+  EXPECT_NE(r[3].error.find("killed by signal 9"), std::string::npos) << r[3].error;
+  EXPECT_FALSE(r[4].ok);
+  EXPECT_EQ(r[4].error, "call 3 of E failed");
+  std::remove(log.c_str());
 }

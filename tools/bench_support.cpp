@@ -14,8 +14,10 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include <sched.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -65,6 +67,66 @@ readAll(int fd)
     text.append(buffer, static_cast<std::size_t>(n));
   }
   return text;
+}
+
+/// Waits for child `pid` to end: its peak RSS goes into `result`; returns its wait status.
+int
+reap(pid_t pid, ChildResult& result)
+{
+  int status = 0;
+  struct rusage usage;
+  std::memset(&usage, 0, sizeof usage);
+  pid_t waited;
+  do
+    waited = ::wait4(pid, &status, 0, &usage);
+  while (waited < 0 && errno == EINTR);
+  if (waited < 0)
+    throw std::runtime_error(std::string("cannot wait for the measurement child: ") + std::strerror(errno));
+  result.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;
+  return status;
+}
+
+std::string
+signalText(int status)
+{
+  return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+}
+
+std::string
+exitText(int status)
+{
+  return "measurement child exited with status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+         " without a result";
+}
+
+/// The whitespace-separated numbers of `text` appended to `values`, token by token with strtod
+/// (operator>> does not read back the "nan" it writes); false with the bad token in `bad`.
+bool
+parseNumbers(const std::string& text, std::vector<double>& values, std::string& bad)
+{
+  std::istringstream numbers(text);
+  std::string token;
+  while (numbers >> token) {
+    char* end = nullptr;
+    const double v = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0') {
+      bad = token;
+      return false;
+    }
+    values.push_back(v);
+  }
+  return true;
+}
+
+/// Process CPU time (user + system, all threads) in ms.
+double
+processCpuMs()
+{
+  struct rusage usage;
+  if (::getrusage(RUSAGE_SELF, &usage) != 0)
+    return std::numeric_limits<double>::quiet_NaN();
+  const auto ms = [](const struct timeval& t) { return t.tv_sec * 1e3 + t.tv_usec * 1e-3; };
+  return ms(usage.ru_utime) + ms(usage.ru_stime);
 }
 
 std::uint64_t
@@ -131,24 +193,13 @@ runInChild(const std::function<std::vector<double>()>& work)
   ::close(fds[1]);
   const std::string payload = readAll(fds[0]);
   ::close(fds[0]);
-  int status = 0;
-  struct rusage usage;
-  std::memset(&usage, 0, sizeof usage);
-  pid_t waited;
-  do
-    waited = ::wait4(pid, &status, 0, &usage);
-  while (waited < 0 && errno == EINTR);
-  if (waited < 0)
-    throw std::runtime_error(std::string("cannot wait for the measurement child: ") + std::strerror(errno));
-
   ChildResult result;
-  result.peak_rss_bytes = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;
+  const int status = reap(pid, result);
   const std::size_t newline = payload.find('\n');
   const std::string head = payload.substr(0, newline);
   const std::string body = newline == std::string::npos ? std::string() : payload.substr(newline + 1);
   if (WIFSIGNALED(status)) {
-    result.error =
-        "killed by signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
+    result.error = signalText(status);
     return result;
   }
   if (head == "error") {
@@ -156,21 +207,13 @@ runInChild(const std::function<std::vector<double>()>& work)
     return result;
   }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || head != "ok") {
-    result.error = "measurement child exited with status " +
-                   std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + " without a result";
+    result.error = exitText(status);
     return result;
   }
-  // Token by token with strtod: operator>> does not read back the "nan" it writes.
-  std::istringstream numbers(body);
-  std::string token;
-  while (numbers >> token) {
-    char* end = nullptr;
-    const double v = std::strtod(token.c_str(), &end);
-    if (end == token.c_str() || *end != '\0') {
-      result.error = "measurement child returned a malformed number '" + token + "'";
-      return result;
-    }
-    result.values.push_back(v);
+  std::string bad;
+  if (!parseNumbers(body, result.values, bad)) {
+    result.error = "measurement child returned a malformed number '" + bad + "'";
+    return result;
   }
   result.ok = true;
   return result;
@@ -190,34 +233,208 @@ peakResidentBytes()
 
 namespace
 {
-double
-processCpuMs()
+/// One line from `fd`, without its newline; false at the end of the stream before a newline.
+bool
+readLine(int fd, std::string& line)
 {
-  struct rusage usage;
-  if (::getrusage(RUSAGE_SELF, &usage) != 0)
-    return std::numeric_limits<double>::quiet_NaN();
-  const auto ms = [](const struct timeval& t) { return t.tv_sec * 1e3 + t.tv_usec * 1e-3; };
-  return ms(usage.ru_utime) + ms(usage.ru_stime);
+  line.clear();
+  for (;;) {
+    char c;
+    const ssize_t n = ::read(fd, &c, 1);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0)
+      return false;
+    if (c == '\n')
+      return true;
+    line.push_back(c);
+  }
+}
+
+std::string
+oneLine(std::string text)
+{
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
+}
+
+/// The child of one method in runInterleaved: prepares it, answers "ready", then times one call
+/// per command byte 'c' and answers "<wall ms> <cpu ms>", until 'q' or the end of the commands.
+[[noreturn]] void
+serveCalls(const TimedMethod& method, int commands, int answers)
+{
+  int status = 0;
+  try {
+    const std::function<void()> call = method.prepare();
+    writeAll(answers, "ready\n");
+    for (;;) {
+      char command = 0;
+      const ssize_t n = ::read(commands, &command, 1);
+      if (n < 0 && errno == EINTR)
+        continue;
+      if (n <= 0 || command != 'c')
+        break;
+      const double cpu = processCpuMs();
+      const auto start = std::chrono::steady_clock::now();
+      call();
+      const double wall =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      std::ostringstream out;
+      out << std::setprecision(17) << wall << ' ' << processCpuMs() - cpu << '\n';
+      writeAll(answers, out.str());
+    }
+  } catch (const std::exception& e) {
+    writeAll(answers, "error " + oneLine(e.what()) + "\n");
+    status = 3;
+  } catch (...) {
+    writeAll(answers, "error unknown exception\n");
+    status = 3;
+  }
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  ::_exit(status); // no atexit handlers or static destructors of the parent's state
+}
+
+bool
+sendCommand(int fd, char command)
+{
+  for (;;) {
+    const ssize_t n = ::write(fd, &command, 1);
+    if (n == 1)
+      return true;
+    if (n < 0 && errno == EINTR)
+      continue;
+    return false; // the child is gone
+  }
 }
 } // namespace
 
-Timings
-timeRuns(const std::function<void()>& run, int runs, bool warmup)
+std::vector<ChildResult>
+runInterleaved(const std::vector<TimedMethod>& methods)
 {
-  if (warmup)
-    run();
-  Timings t;
-  t.wall_ms.reserve(static_cast<std::size_t>(runs));
-  t.cpu_ms.reserve(static_cast<std::size_t>(runs));
-  for (int r = 0; r < runs; ++r) {
-    const double cpu = processCpuMs();
-    const auto start = std::chrono::steady_clock::now();
-    run();
-    t.wall_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    t.cpu_ms.push_back(processCpuMs() - cpu);
+  struct Child
+  {
+    pid_t pid = -1;
+    int commands = -1, answers = -1;
+    bool running = false;
+    std::string error; // set when the child reported one
+    std::vector<double> wall, cpu;
+  };
+  const std::size_t count = methods.size();
+  std::vector<Child> children(count);
+  std::vector<ChildResult> results(count);
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  // A child that has died must not end the parent with SIGPIPE at its next command.
+  struct sigaction ignore, previous;
+  std::memset(&ignore, 0, sizeof ignore);
+  ignore.sa_handler = SIG_IGN;
+  ::sigaction(SIGPIPE, &ignore, &previous);
+  const auto closeFd = [](int& fd) {
+    if (fd >= 0)
+      ::close(fd);
+    fd = -1;
+  };
+  for (std::size_t k = 0; k < count; ++k) {
+    int down[2], up[2];
+    if (::pipe(down) != 0) {
+      results[k].error = std::string("cannot create a pipe for the measurement child: ") + std::strerror(errno);
+      continue;
+    }
+    if (::pipe(up) != 0) {
+      results[k].error = std::string("cannot create a pipe for the measurement child: ") + std::strerror(errno);
+      ::close(down[0]), ::close(down[1]);
+      continue;
+    }
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+      results[k].error = std::string("cannot fork the measurement child: ") + std::strerror(errno);
+      ::close(down[0]), ::close(down[1]), ::close(up[0]), ::close(up[1]);
+      continue;
+    }
+    if (pid == 0) {
+      ::close(down[1]);
+      ::close(up[0]);
+      for (std::size_t j = 0; j < k; ++j) // the other children's pipes are not this one's
+        closeFd(children[j].commands), closeFd(children[j].answers);
+      serveCalls(methods[k], down[0], up[1]);
+    }
+    ::close(down[0]);
+    ::close(up[1]);
+    Child& c = children[k];
+    c.pid = pid, c.commands = down[1], c.answers = up[0], c.running = true;
   }
-  return t;
+  // A child's line was not a result: it reported an error or died (reason from its status).
+  const auto failed = [](Child& c, bool complete, const std::string& line) {
+    if (complete)
+      c.error = line.compare(0, 6, "error ") == 0 ? line.substr(6)
+                                                 : "measurement child returned a malformed result '" + line + "'";
+    c.running = false;
+  };
+  std::string line;
+  for (Child& c : children) {
+    if (!c.running)
+      continue;
+    const bool complete = readLine(c.answers, line);
+    if (!complete || line != "ready")
+      failed(c, complete, line);
+  }
+  // One call of method k; false (and the child marked failed) if it gave no result.
+  const auto call = [&](std::size_t k, std::vector<double>& result) {
+    Child& c = children[k];
+    const bool complete = sendCommand(c.commands, 'c') && readLine(c.answers, line);
+    std::string bad;
+    result.clear();
+    if (complete && parseNumbers(line, result, bad) && result.size() == 2)
+      return true;
+    failed(c, complete, line);
+    return false;
+  };
+  std::vector<double> result;
+  for (int round = 0;; ++round) {
+    bool any = false;
+    // In the given order every round: methods next to each other in the list take their turns
+    // next to each other in time.
+    for (std::size_t k = 0; k < count; ++k) {
+      Child& c = children[k];
+      if (!c.running || round >= methods[k].runs)
+        continue;
+      any = true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(kSettleMs));
+      if (methods[k].warmup && !call(k, result))
+        continue;
+      if (call(k, result))
+        c.wall.push_back(result[0]), c.cpu.push_back(result[1]);
+    }
+    if (!any)
+      break;
+  }
+  for (std::size_t k = 0; k < count; ++k) {
+    Child& c = children[k];
+    if (c.pid < 0)
+      continue;
+    if (c.running)
+      sendCommand(c.commands, 'q');
+    closeFd(c.commands);
+    closeFd(c.answers);
+    ChildResult& r = results[k];
+    const int status = reap(c.pid, r);
+    if (c.running && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+      r.ok = true;
+      r.values = c.wall;
+      r.values.insert(r.values.end(), c.cpu.begin(), c.cpu.end());
+    } else if (!c.error.empty()) {
+      r.error = c.error;
+    } else if (WIFSIGNALED(status)) {
+      r.error = signalText(status);
+    } else {
+      r.error = exitText(status);
+    }
+  }
+  ::sigaction(SIGPIPE, &previous, nullptr);
+  return results;
 }
 
 double

@@ -1,6 +1,6 @@
-// Helpers of range_nlm_bench: isolated measurement of one method in a forked child process,
-// statistics, machine description, JSON text, and the frame preparation (centre crop, fresh
-// depth-camera noise) the benchmark configurations need.
+// Helpers of range_nlm_bench: isolated measurement in forked child processes (one piece of work,
+// or several methods taking turns), statistics, machine description, JSON text, and the frame
+// preparation (centre crop, fresh depth-camera noise) the benchmark configurations need.
 #pragma once
 
 #include <pcl/point_cloud.h>
@@ -46,18 +46,34 @@ residentBytes();
 std::uint64_t
 peakResidentBytes();
 
-/// Wall-clock and CPU milliseconds of each timed run.
-struct Timings
+/// One method for runInterleaved: `prepare` runs once in the method's own child process (not
+/// timed) and returns the call to time, `runs` times; with `warmup`, each timed call comes right
+/// after an untimed one.
+struct TimedMethod
 {
-  std::vector<double> wall_ms;
-  /// CPU time of the whole process (user + system, all threads; getrusage) per run. On a shared
-  /// machine it varies less than wall time, but includes OpenMP's busy waiting.
-  std::vector<double> cpu_ms;
+  std::function<std::function<void()>()> prepare;
+  int runs = 1;
+  bool warmup = true;
 };
 
-/// Times `run` once as a warm-up (if `warmup`) and then `runs` times.
-Timings
-timeRuns(const std::function<void()>& run, int runs, bool warmup);
+/// Milliseconds the parent waits before each method's turn, so that the OpenMP threads of the
+/// method before (libgomp's idle threads spin for up to about 10 ms before they sleep) have
+/// stopped competing for the cores.
+constexpr int kSettleMs = 20;
+
+/// Times several methods, each in a child process of its own (its own address space and peak
+/// memory, as with runInChild), in rounds: every round, each method with runs left takes one
+/// turn, in the order given, an untimed warm-up call (if `warmup`) and then the timed call. A change of the
+/// machine's speed while the benchmark runs (other work on a shared machine) then reaches every
+/// method alike instead of whichever happened to be running; the warm-up call of each turn gives
+/// the timed one the warm caches and threads that back-to-back calls have. Result k is method
+/// k's: `values` holds the wall-clock milliseconds of its timed calls, then the process CPU
+/// milliseconds of each (user + system, all threads; includes OpenMP's busy waiting);
+/// `peak_rss_bytes` comes from wait4 when the child has ended. A method that fails (exception,
+/// crash) drops out with its error and the others go on. The parent must not have started an
+/// OpenMP thread pool (see runInChild).
+std::vector<ChildResult>
+runInterleaved(const std::vector<TimedMethod>& methods);
 
 /// Median of a non-empty sample (mean of the two middle values for an even count).
 double

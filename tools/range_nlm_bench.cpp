@@ -1,6 +1,7 @@
 // range_nlm_bench: times range_nlm (fast and direct evaluation) against PCL's
 // FastBilateralFilterOMP and MovingLeastSquares in one run, on the same frames, in the paper's
-// configurations, with the peak memory of each method measured in its own child process.
+// configurations, each method in a child process of its own (its own peak memory) and the
+// methods of a configuration interleaved call by call.
 #include "bench_support.h"
 #include "quality_comparison.h"
 #include "temporal_comparison.h"
@@ -50,8 +51,10 @@ const char* const kUsage =
     "against pcl::FastBilateralFilterOMP and pcl::MovingLeastSquares on the same frames, in the\n"
     "paper's configurations: static 7x7 search / 5x5 patch on a 640x480 frame, and temporal\n"
     "19x19 / 11x11 with radius 1 (3 frames) on 480x400 centre crops. Each method runs in its own\n"
-    "child process: a warm-up run, then the median of --runs runs; its peak memory is the\n"
-    "child's ru_maxrss reported by wait4. Without options it uses the frames shipped in data/.";
+    "child process; its peak memory is the child's ru_maxrss reported by wait4. The methods of a\n"
+    "configuration take turns, --runs rounds of one turn each: an untimed warm-up run, then a\n"
+    "timed one. A change of the machine's speed then reaches all of them alike. Each method's\n"
+    "figure is the median of its timed runs. Without options it uses the frames shipped in data/.";
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using CloudConstPtr = Cloud::ConstPtr;
@@ -194,11 +197,19 @@ progress(const Settings& s, const std::string& text)
 /// A prepared method: builds its objects (not timed) and returns the timed call.
 using Prepare = std::function<std::function<void()>()>;
 
-Row
-measure(const Settings& s, const std::string& method, const Frames& frames, int runs, bool warmup,
-        const std::string& note, const Prepare& prepare)
+/// A method to time: its row (filled in by measureInterleaved) and how to prepare it.
+struct Pending
 {
   Row row;
+  Prepare prepare;
+};
+
+Pending
+pending(const Settings& s, const std::string& method, const Frames& frames, int runs, bool warmup,
+        const std::string& note, const Prepare& prepare)
+{
+  Pending p;
+  Row& row = p.row;
   row.method = method;
   row.config = frames.label;
   const Cloud& current = *frames.clouds[frames.center];
@@ -209,32 +220,49 @@ measure(const Settings& s, const std::string& method, const Frames& frames, int 
   row.runs = runs;
   row.warmup = warmup;
   row.note = note;
-  progress(s, "timing " + method + " [" + frames.label + "], " + (warmup ? "warm-up + " : "") +
-                  std::to_string(runs) + " run(s)");
-  row.result = bench::runInChild([&] {
-    const std::function<void()> run = prepare();
-    bench::Timings t = bench::timeRuns(run, runs, warmup);
-    t.wall_ms.insert(t.wall_ms.end(), t.cpu_ms.begin(), t.cpu_ms.end()); // wall times, then CPU times
-    return t.wall_ms;
-  });
-  const std::vector<double>& v = row.result.values;
-  if (row.result.ok && v.size() == 2 * static_cast<std::size_t>(runs)) {
-    row.samples_ms.assign(v.begin(), v.begin() + runs);
-    row.median_ms = bench::median(row.samples_ms);
-    row.min_ms = *std::min_element(row.samples_ms.begin(), row.samples_ms.end());
-    row.max_ms = *std::max_element(row.samples_ms.begin(), row.samples_ms.end());
-    row.cpu_ms = bench::median(std::vector<double>(v.begin() + runs, v.end()));
-    std::ostringstream done;
-    done << "  median " << std::fixed << std::setprecision(1) << row.median_ms << " ms, peak "
-         << megabytes(row.result.peak_rss_bytes) << " MB";
-    progress(s, done.str());
-  } else if (row.result.ok) {
-    row.result.ok = false;
-    row.result.error = "incomplete timing result";
+  p.prepare = prepare;
+  return p;
+}
+
+/// Times the methods of one configuration interleaved call by call (bench::runInterleaved), each
+/// in a child process of its own, and returns their rows in the given order.
+std::vector<Row>
+measureInterleaved(const Settings& s, const std::string& config, std::vector<Pending> methods)
+{
+  std::vector<bench::TimedMethod> timed;
+  int rounds = 0;
+  for (const Pending& p : methods) {
+    timed.push_back({p.prepare, p.row.runs, p.row.warmup});
+    rounds = std::max(rounds, p.row.runs);
   }
-  if (!row.result.ok)
-    progress(s, "  failed: " + row.result.error);
-  return row;
+  progress(s, "timing " + std::to_string(methods.size()) + " methods [" + config + "] in turns, " +
+                  std::to_string(rounds) + " round(s) of a warm-up call and a timed call each");
+  const std::vector<bench::ChildResult> results = bench::runInterleaved(timed);
+  std::vector<Row> rows;
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    Row row = methods[k].row;
+    row.result = results[k];
+    const int runs = row.runs;
+    const std::vector<double>& v = row.result.values;
+    if (row.result.ok && v.size() == 2 * static_cast<std::size_t>(runs)) {
+      row.samples_ms.assign(v.begin(), v.begin() + runs);
+      row.median_ms = bench::median(row.samples_ms);
+      row.min_ms = *std::min_element(row.samples_ms.begin(), row.samples_ms.end());
+      row.max_ms = *std::max_element(row.samples_ms.begin(), row.samples_ms.end());
+      row.cpu_ms = bench::median(std::vector<double>(v.begin() + runs, v.end()));
+      std::ostringstream done;
+      done << "  " << row.method << ": median " << std::fixed << std::setprecision(1) << row.median_ms
+           << " ms, peak " << megabytes(row.result.peak_rss_bytes) << " MB";
+      progress(s, done.str());
+    } else if (row.result.ok) {
+      row.result.ok = false;
+      row.result.error = "incomplete timing result";
+    }
+    if (!row.result.ok)
+      progress(s, "  " + row.method + " failed: " + row.result.error);
+    rows.push_back(std::move(row));
+  }
+  return rows;
 }
 
 Prepare
@@ -349,53 +377,53 @@ std::vector<Row>
 benchStatic(const Settings& s, const Frames& frames)
 {
   const CloudConstPtr& cloud = frames.clouds[frames.center];
-  std::vector<Row> rows;
-  rows.push_back(
-      measure(s, "range_nlm fast", frames, s.runs, true, describe(s) + "; Evaluation::fast",
+  std::vector<Pending> methods;
+  methods.push_back(
+      pending(s, "range_nlm fast", frames, s.runs, true, describe(s) + "; Evaluation::fast",
               prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast))));
   if (!s.no_direct)
-    rows.push_back(
-        measure(s, "range_nlm direct", frames, s.runs, true, describe(s) + "; Evaluation::direct",
+    methods.push_back(
+        pending(s, "range_nlm direct", frames, s.runs, true, describe(s) + "; Evaluation::direct",
                 prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::direct))));
-  rows.push_back(measure(s, "pcl FastBilateralFilterOMP", frames, s.runs, true,
-                         "sigma_s 5, sigma_r 0.03; fills NaN pixels with a finite z (PCL #1027)",
-                         prepareBilateral(cloud, s.threads)));
-  rows.push_back(measure(s, "pcl MovingLeastSquares", frames, s.runs, true, mlsNote(frames),
-                         prepareMls(cloud, frames.mls_radius, s.threads)));
-  return rows;
+  methods.push_back(pending(s, "pcl FastBilateralFilterOMP", frames, s.runs, true,
+                            "sigma_s 5, sigma_r 0.03; fills NaN pixels with a finite z (PCL #1027)",
+                            prepareBilateral(cloud, s.threads)));
+  methods.push_back(pending(s, "pcl MovingLeastSquares", frames, s.runs, true, mlsNote(frames),
+                            prepareMls(cloud, frames.mls_radius, s.threads)));
+  return measureInterleaved(s, frames.label, std::move(methods));
 }
 
 std::vector<Row>
 benchTemporal(const Settings& s, const Frames& frames)
 {
   const CloudConstPtr& cloud = frames.clouds[frames.center];
-  std::vector<Row> rows;
+  std::vector<Pending> methods;
   const FilterParameters fast = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast);
   const FilterParameters direct = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::direct);
-  rows.push_back(
-      measure(s, "range_nlm temporal fast", frames, s.runs, true,
+  methods.push_back(
+      pending(s, "range_nlm temporal fast", frames, s.runs, true,
               "TemporalNonLocalMeansFilter, centre of 3 frames; " + describe(s) + "; Evaluation::fast",
               prepareTemporal(frames, fast)));
   if (s.no_direct) {
     // the reference path is left out (--no-direct)
   } else if (s.all)
-    rows.push_back(measure(s, "range_nlm temporal direct", frames, s.runs, true,
-                           "TemporalNonLocalMeansFilter; " + describe(s) + "; Evaluation::direct",
-                           prepareTemporal(frames, direct)));
+    methods.push_back(pending(s, "range_nlm temporal direct", frames, s.runs, true,
+                              "TemporalNonLocalMeansFilter; " + describe(s) + "; Evaluation::direct",
+                              prepareTemporal(frames, direct)));
   else
-    rows.push_back(measure(s, "range_nlm temporal direct", frames, 1, false,
-                           "Evaluation::direct, timed once without warm-up (--all for warm-up + --runs)",
-                           prepareTemporal(frames, direct)));
+    methods.push_back(pending(s, "range_nlm temporal direct", frames, 1, false,
+                              "Evaluation::direct, timed once without warm-up (--all for warm-up + --runs)",
+                              prepareTemporal(frames, direct)));
   Frames single = frames;
   single.clouds = {cloud};
   single.center = 0;
-  rows.push_back(measure(s, "pcl FastBilateralFilterOMP", single, s.runs, true,
-                         "centre frame alone (no temporal neighbours), sigma_s 5, sigma_r 0.03",
-                         prepareBilateral(cloud, s.threads)));
-  rows.push_back(measure(s, "pcl MovingLeastSquares", single, s.runs, true,
-                         "centre frame alone; " + mlsNote(frames),
-                         prepareMls(cloud, frames.mls_radius, s.threads)));
-  return rows;
+  methods.push_back(pending(s, "pcl FastBilateralFilterOMP", single, s.runs, true,
+                            "centre frame alone (no temporal neighbours), sigma_s 5, sigma_r 0.03",
+                            prepareBilateral(cloud, s.threads)));
+  methods.push_back(pending(s, "pcl MovingLeastSquares", single, s.runs, true,
+                            "centre frame alone; " + mlsNote(frames),
+                            prepareMls(cloud, frames.mls_radius, s.threads)));
+  return measureInterleaved(s, frames.label, std::move(methods));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -903,8 +931,9 @@ printTable(const Settings& s, const RunInfo& info, const std::vector<std::string
       << " at end; " << fixed(info.wall_s, 0) << " s in all\n";
   for (const std::string& src : sources)
     out << src << "\n";
-  out << "timing: warm-up + median of " << s.runs
-      << " run(s) per method, each method in its own child process;"
+  out << "timing: median of " << s.runs
+      << " timed run(s) per method, each method in its own child process, the methods of a configuration"
+         " taking turns (each turn a warm-up run, then a timed one);"
       << " cpu ms = median process CPU time per run (all threads); Mpts/s = grid points (width x height) / "
          "median"
       << " time\n"
@@ -1128,9 +1157,9 @@ run(int argc, char** argv)
     ("preset", po::value<std::string>()->default_value("default"),
      "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
     ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")
-    ("runs", po::value<int>()->default_value(5), "timed runs per method after one warm-up run; the median is reported")
+    ("runs", po::value<int>()->default_value(5), "timed runs per method, each right after an untimed warm-up run; the median is reported")
     ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
-    ("all", "also give the temporal direct path a warm-up and --runs runs (default: timed once, it is very slow)")
+    ("all", "also give the temporal direct path --runs runs with warm-ups (default: timed once without one, it is very slow)")
     ("no-direct", "leave out the direct (reference) evaluation, which takes minutes in the temporal configuration")
     ("breakdown", "time the kernel phases (normals, pre-smoothing, bandwidths, offsets) of each configuration")
     ("sequence-memory", po::value<int>()->default_value(0),
