@@ -38,6 +38,7 @@ toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what)
   // invalid points alternate): |x| below the exponent's all-ones pattern is finite, equal to it is
   // infinite. The position of an infinity is looked for only once one was seen.
   const std::uint32_t nan_bits = 0x7fc00000u; // quiet NaN
+  const std::uint32_t inf_bits = 0x7f800000u; // |x| of an infinity; finite below
   std::uint32_t infinite = 0;
   float* __restrict gx = grid.x.data();
   float* __restrict gy = grid.y.data();
@@ -52,10 +53,8 @@ toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what)
     std::memcpy(&by, &p.y, sizeof by);
     std::memcpy(&bz, &p.z, sizeof bz);
     const std::uint32_t ax = bx & 0x7fffffffu, ay = by & 0x7fffffffu, az = bz & 0x7fffffffu;
-    const std::uint32_t ok = static_cast<std::uint32_t>(ax < 0x7f800000u) & static_cast<std::uint32_t>(ay < 0x7f800000u) &
-                             static_cast<std::uint32_t>(az < 0x7f800000u);
-    infinite |= static_cast<std::uint32_t>(ax == 0x7f800000u) | static_cast<std::uint32_t>(ay == 0x7f800000u) |
-                static_cast<std::uint32_t>(az == 0x7f800000u);
+    const std::uint32_t ok = std::uint32_t{ax < inf_bits} & std::uint32_t{ay < inf_bits} & std::uint32_t{az < inf_bits};
+    infinite |= std::uint32_t{ax == inf_bits} | std::uint32_t{ay == inf_bits} | std::uint32_t{az == inf_bits};
     const std::uint32_t keep = 0u - ok;
     bx = (bx & keep) | (nan_bits & ~keep);
     by = (by & keep) | (nan_bits & ~keep);
