@@ -1,7 +1,7 @@
 // range_nlm_bench: times range_nlm (fast and direct evaluation) against PCL's
 // FastBilateralFilterOMP and MovingLeastSquares in one run, on the same frames, in the paper's
 // configurations, each method in a child process of its own (its own peak memory) and the
-// methods of a configuration interleaved call by call.
+// methods of a configuration taking turns (a warm-up call, then the timed one).
 #include "bench_support.h"
 #include "quality_comparison.h"
 #include "temporal_comparison.h"
@@ -224,7 +224,7 @@ pending(const Settings& s, const std::string& method, const Frames& frames, int 
   return p;
 }
 
-/// Times the methods of one configuration interleaved call by call (bench::runInterleaved), each
+/// Times the methods of one configuration in turns (bench::runInterleaved), each
 /// in a child process of its own, and returns their rows in the given order.
 std::vector<Row>
 measureInterleaved(const Settings& s, const std::string& config, std::vector<Pending> methods)
