@@ -63,7 +63,17 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
   for (std::size_t s = 0; s < count; ++s) {
     const std::size_t m = order[s];
     const std::size_t b = static_cast<std::size_t>(std::upper_bound(first.begin(), first.end(), m) - first.begin()) - 1;
+    // Whole chunks of the block counted at once (vectorized), then the chunk holding the m-th
+    // candidate scanned point by point.
+    constexpr std::size_t kChunk = 32;
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
     std::size_t seen = first[b], i = b * kBlock;
+    for (; i + kChunk <= end; i += kChunk) {
+      const std::size_t in_chunk = countCandidates(&grid.valid[i], &normals.nx[i], static_cast<int>(kChunk));
+      if (seen + in_chunk > m)
+        break;
+      seen += in_chunk;
+    }
     for (;; ++i)
       if (candidate(i) && seen++ == m)
         break;
@@ -82,17 +92,17 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
     int valid = 0;
     for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
       for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        // Branch-free (valid and invalid points alternate at holes): invalid points add 0.
         const int j = jv * grid.width + ju;
-        if (!grid.valid[j])
-          continue;
-        const double dx = double(grid.x[j]) - grid.x[k];
-        const double dy = double(grid.y[j]) - grid.y[k];
-        const double dz = double(grid.z[j]) - grid.z[k];
+        const bool ok = grid.valid[j] != 0;
+        const double dx = ok ? double(grid.x[j]) - grid.x[k] : 0.0;
+        const double dy = ok ? double(grid.y[j]) - grid.y[k] : 0.0;
+        const double dz = ok ? double(grid.z[j]) - grid.z[k] : 0.0;
         max_dist2 = std::max(max_dist2, dx * dx + dy * dy + dz * dz);
         const double h = dx * nx + dy * ny + dz * nz;
         sum_h += h;
         sum_h2 += h * h;
-        ++valid;
+        valid += ok ? 1 : 0;
       }
     const double mean = sum_h / valid;
     extent[s] = std::sqrt(max_dist2);
