@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 using namespace range_nlm;
@@ -191,6 +193,52 @@ TEST(Kernel, TemporalWeights)
   EXPECT_FLOAT_EQ(temporalNoiseWeight(2.0f, 2.0f), std::exp(-1.0f));
   EXPECT_FLOAT_EQ(temporalNoiseWeight(1.0f, 2.0f), std::exp(-0.25f));
   EXPECT_FLOAT_EQ(temporalNoiseWeight(0.0f, 0.0f), std::exp(-1.0f));
+}
+
+TEST(Kernel, BandwidthSamplesAreTheDocumentedCandidates)
+{
+  // Sample m is the m-th valid point with a finite normal in index order, m = rng() % candidates
+  // with std::mt19937_64(seed); the bandwidths are the means of the sampled windows' largest
+  // distance and height spread. Holes, and valid points without a normal, make the candidates
+  // of a 256-point block (and of its 32-point chunks) uneven, so a wrong count shows.
+  const Grid grid = randomSurface(90, 70, 0.2, 21);
+  NormalField normals = estimateNormals(grid, 3, Viewpoint{0, 0, 0}, 1);
+  for (std::size_t i = 0; i < grid.size(); i += 7)
+    normals.nx[i] = std::numeric_limits<float>::quiet_NaN();
+  const int samples = 300, r = 2;
+  const std::uint64_t seed = 5;
+  std::vector<int> candidates;
+  for (std::size_t i = 0; i < grid.size(); ++i)
+    if (grid.valid[i] && std::isfinite(normals.nx[i]))
+      candidates.push_back(static_cast<int>(i));
+  std::mt19937_64 rng(seed);
+  std::vector<int> picks(samples);
+  for (int& k : picks)
+    k = candidates[rng() % candidates.size()];
+  std::sort(picks.begin(), picks.end());
+  double sum_extent = 0.0, sum_spread = 0.0;
+  for (const int k : picks) {
+    const int u = k % grid.width, v = k / grid.width;
+    double max_dist2 = 0.0, sum_h = 0.0, sum_h2 = 0.0;
+    int valid = 0;
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        const int j = jv * grid.width + ju;
+        if (!grid.valid[j])
+          continue;
+        const double dx = double(grid.x[j]) - grid.x[k], dy = double(grid.y[j]) - grid.y[k];
+        const double dz = double(grid.z[j]) - grid.z[k];
+        max_dist2 = std::max(max_dist2, dx * dx + dy * dy + dz * dz);
+        const double h = dx * normals.nx[k] + dy * normals.ny[k] + dz * normals.nz[k];
+        sum_h += h, sum_h2 += h * h, ++valid;
+      }
+    const double mean = sum_h / valid;
+    sum_extent += std::sqrt(max_dist2);
+    sum_spread += std::sqrt(std::max(0.0, sum_h2 / valid - mean * mean));
+  }
+  const Bandwidths b = estimateBandwidths(grid, normals, 2 * r + 1, samples, seed);
+  EXPECT_FLOAT_EQ(b.mu_d, static_cast<float>(sum_extent / samples));
+  EXPECT_FLOAT_EQ(b.sigma_s, static_cast<float>(sum_spread / samples));
 }
 
 TEST(Kernel, BandwidthsAreDeterministicPerSeed)
