@@ -1,7 +1,7 @@
 // libFuzzer target over the PCD-reading and filtering path.
 //
 // Each input is used twice:
-//  1. as a file: written to a temporary path and read with tools::loadCloud + tools::xyzFromBlob.
+//  1. as a file: written to a temporary path and read with io::loadCloud + io::xyzFromBlob.
 //     InputError (with a one-line message naming the file) is the documented failure; any other
 //     exception, a crash or a sanitizer report is a bug. A cloud that loads must be consistent.
 //  2. as a recipe: decoded into a small organized cloud (w, h in 1 .. 24; NaN, Inf, huge and
@@ -17,7 +17,7 @@
 // holds the parameters; tests/test_bad_input.cpp filters every tests/data/fuzz-*.pcd that way and
 // runs range_nlm_denoise on every tests/data/fuzz-* file.
 #include "fuzz_contract.h"
-#include "tool_common.h"
+#include <range_nlm/io/pcd_file.h>
 
 #include <range_nlm/nonlocal_means_filter.h>
 
@@ -41,7 +41,7 @@
 namespace
 {
 using range_nlm::fuzz::tooSparseForNoiseEstimate;
-using range_nlm::tools::InputError;
+using range_nlm::io::InputError;
 
 [[noreturn]] void
 bug(const std::string& what)
@@ -68,12 +68,12 @@ readAsFile(const std::uint8_t* data, std::size_t size)
   }
   const bool organized = size % 2 == 0;
   try {
-    const range_nlm::tools::LoadedCloud loaded = range_nlm::tools::loadCloud(path, organized);
+    const range_nlm::io::LoadedCloud loaded = range_nlm::io::loadCloud(path, organized);
     const pcl::PCLPointCloud2& blob = loaded.blob;
     if (blob.width == 0 || blob.height == 0 || (organized && blob.height < 2) ||
         blob.data.size() != std::size_t(blob.width) * blob.height * blob.point_step)
       bug("loadCloud accepted an inconsistent cloud");
-    const pcl::PointCloud<pcl::PointXYZ> cloud = range_nlm::tools::xyzFromBlob(loaded, path);
+    const pcl::PointCloud<pcl::PointXYZ> cloud = range_nlm::io::xyzFromBlob(loaded, path);
     if (cloud.width != blob.width || cloud.height != blob.height)
       bug("xyzFromBlob changed the size");
     for (const pcl::PointXYZ& p : cloud) {

@@ -1,9 +1,10 @@
 // range_nlm_denoise: filters one organized PCD frame, or every frame of a directory (optionally
 // with the temporal filter, in one or several passes), keeping every field of the input.
-#include "tool_common.h"
+#include "cli/cli.h"
 
-#include <range_nlm/render.h>
+#include <range_nlm/eval/render.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
+#include <range_nlm/temporal_stream.h>
 
 #include <algorithm>
 #include <deque>
@@ -101,69 +102,6 @@ struct FrameReport
   Bandwidths bandwidths;
 };
 
-/// One pass over the sequence, with the windows of TemporalStream: frame t is filtered with frames
-/// t - r .. t + r (causal: t - r .. t), clipped at the sequence ends, and at most 2r + 1 frames are
-/// held. Unlike TemporalStream it passes a frame that no later result depends on through
-/// unfiltered, as a null cloud: with --resume a finished frame is still read as a neighbour, but
-/// neither filtered nor written again.
-class PassStream
-{
-public:
-  PassStream(const Pass& pass, std::vector<bool> needed) : pass_(pass), needed_(std::move(needed)) {}
-  /// Adds the next frame (null if no needed frame reads it); returns the frames that became ready.
-  std::vector<Cloud::ConstPtr> push(const Cloud::ConstPtr& frame)
-  {
-    window_.push_back(frame);
-    ++pushed_;
-    std::vector<Cloud::ConstPtr> ready;
-    const std::size_t lag = pass_.causal ? 0 : static_cast<std::size_t>(pass_.radius);
-    while (emitted_ + lag < pushed_)
-      ready.push_back(emit());
-    return ready;
-  }
-  std::vector<Cloud::ConstPtr> flush()
-  {
-    std::vector<Cloud::ConstPtr> ready;
-    while (emitted_ < pushed_)
-      ready.push_back(emit());
-    return ready;
-  }
-  const Bandwidths& lastBandwidths() const { return bandwidths_; }
-
-private:
-  Cloud::ConstPtr emit()
-  {
-    const std::size_t t = emitted_++;
-    const std::size_t r = static_cast<std::size_t>(pass_.radius);
-    Cloud::Ptr out;
-    if (needed_[t]) {
-      const std::size_t lo = t >= r ? t - r : 0;
-      const std::size_t hi = pass_.causal ? t : std::min(t + r, pushed_ - 1);
-      const std::deque<Cloud::ConstPtr> frames(window_.begin() + (lo - first_),
-                                               window_.begin() + (hi - first_ + 1));
-      TemporalNonLocalMeansFilter<pcl::PointXYZ> filter;
-      filter.setParameters(pass_.parameters);
-      filter.setFrames(frames, t - lo);
-      out.reset(new Cloud);
-      filter.filter(*out);
-      bandwidths_ = filter.getFrameBandwidths()[t - lo];
-    }
-    while (!window_.empty() && first_ + r < emitted_) { // in no later window
-      window_.pop_front();
-      ++first_;
-    }
-    return out;
-  }
-
-  Pass pass_;
-  std::vector<bool> needed_;
-  std::deque<Cloud::ConstPtr> window_; // frames first_ .. first_ + size - 1
-  std::size_t first_ = 0;
-  std::size_t pushed_ = 0;
-  std::size_t emitted_ = 0;
-  Bandwidths bandwidths_;
-};
-
 /// The frames a pass reads to filter the `needed` ones.
 std::vector<bool>
 framesRead(const Pass& pass, const std::vector<bool>& needed)
@@ -177,7 +115,7 @@ framesRead(const Pass& pass, const std::vector<bool>& needed)
   return read;
 }
 
-/// The chain of passes, each a PassStream, feeding the next.
+/// The chain of passes, each a TemporalStream, feeding the next.
 class PassChain
 {
 public:
@@ -193,30 +131,41 @@ public:
     }
     inputs_read_ = next;
     for (std::size_t level = 0; level < passes.size(); ++level)
-      streams_.push_back(std::make_unique<PassStream>(passes[level], needed[level]));
+      levels_.push_back({std::make_unique<TemporalStream<pcl::PointXYZ>>(passes[level].radius, passes[level].causal,
+                                                                          passes[level].parameters),
+                         needed[level]});
   }
   /// False if no result depends on input frame t: it need not even be loaded.
   bool inputRead(std::size_t t) const { return inputs_read_[t]; }
   /// Pushes a frame through every pass; returns the finished frames (null: not wanted).
   std::vector<Cloud::ConstPtr> push(const Cloud::ConstPtr& frame) { return feed(0, {frame}, false); }
   std::vector<Cloud::ConstPtr> flush() { return feed(0, {}, true); }
-  const Bandwidths& firstPassBandwidths() const { return streams_.front()->lastBandwidths(); }
+  const Bandwidths& firstPassBandwidths() const { return levels_.front().stream->lastBandwidths(); }
 
 private:
+  /// One pass: its stream and which of its frames the next pass (or the output) reads.
+  struct Level
+  {
+    std::unique_ptr<TemporalStream<pcl::PointXYZ>> stream;
+    std::vector<bool> needed;
+    std::size_t pushed = 0;
+  };
+
   std::vector<Cloud::ConstPtr> feed(std::size_t level, const std::vector<Cloud::ConstPtr>& in, bool flush)
   {
+    Level& l = levels_[level];
     std::vector<Cloud::ConstPtr> out;
     for (const auto& f : in)
-      for (auto& r : streams_[level]->push(f))
+      for (auto& r : l.stream->push(f, l.needed[l.pushed++]))
         out.push_back(r);
     if (flush)
-      for (auto& r : streams_[level]->flush())
+      for (auto& r : l.stream->flush())
         out.push_back(r);
-    if (level + 1 == streams_.size())
+    if (level + 1 == levels_.size())
       return out;
     return feed(level + 1, out, flush);
   }
-  std::vector<std::unique_ptr<PassStream>> streams_;
+  std::vector<Level> levels_;
   std::vector<bool> inputs_read_;
 };
 

@@ -1,9 +1,9 @@
 // range_nlm_eval: accuracy of filtered range frames against ground truth (range_nlm_synth output):
 // point-to-plane RMSE and normal error in flat and feature regions, lost points, and for
 // sequences the temporal standard deviation and the error at moving edges.
-#include "tool_common.h"
+#include "cli/cli.h"
 
-#include <range_nlm/evaluation.h>
+#include <range_nlm/eval/metrics.h>
 
 #include <cmath>
 #include <cstring>

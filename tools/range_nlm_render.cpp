@@ -1,8 +1,8 @@
 // range_nlm_render: images of organized range frames (flat shading or mean-curvature colour),
 // before/after comparisons on one colour scale, and curvature-coloured clouds for pcl_viewer.
-#include "tool_common.h"
+#include "cli/cli.h"
 
-#include <range_nlm/render.h>
+#include <range_nlm/eval/render.h>
 
 #include <iomanip>
 #include <iostream>

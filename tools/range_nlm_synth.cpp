@@ -1,8 +1,8 @@
 // range_nlm_synth: renders synthetic organized range frames with exact ground truth, for measuring
 // filters with range_nlm_eval.
-#include "tool_common.h"
+#include "cli/cli.h"
 
-#include <range_nlm/synthetic_scene.h>
+#include <range_nlm/eval/synthetic_scene.h>
 
 #include <algorithm>
 #include <iomanip>

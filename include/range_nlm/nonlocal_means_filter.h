@@ -3,7 +3,7 @@
 /// Seidel 2006, Sec. 3.2; decisions in the README) as a pcl::Filter.
 #pragma once
 
-#include <range_nlm/kernel.h>
+#include <range_nlm/core/pipeline.h>
 #include <range_nlm/parameter_setters.h>
 
 #include <pcl/filters/filter.h>

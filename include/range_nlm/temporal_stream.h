@@ -2,12 +2,13 @@
 /// \brief Frame-by-frame temporal filtering for live sensors and long recordings.
 #pragma once
 
-#include <range_nlm/kernel.h>
+#include <range_nlm/core/pipeline.h>
 #include <range_nlm/parameters.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
 
 #include <pcl/point_cloud.h>
 
+#include <cstdint>
 #include <deque>
 #include <vector>
 
@@ -32,7 +33,11 @@ public:
 
   /// Adds the next frame; returns the frames that became ready (zero or one). Throws
   /// std::invalid_argument if the frame's size differs from the first frame's.
-  std::vector<CloudPtr> push(const CloudConstPtr& frame);
+  /// With `wanted` false the frame is only a neighbour of the others: it is not filtered and its
+  /// output is a null pointer (for resuming a run, or a pass of a schedule whose next pass reads
+  /// only some frames). Such a frame may itself be null if no wanted frame's window holds it;
+  /// a wanted frame whose window holds a null frame throws std::invalid_argument.
+  std::vector<CloudPtr> push(const CloudConstPtr& frame, bool wanted = true);
   /// Filters the frames still waiting for future neighbours, with the windows clipped at the end.
   std::vector<CloudPtr> flush();
 
@@ -51,7 +56,9 @@ private:
   bool causal_;
   FilterParameters parameters_;
   std::deque<CloudConstPtr> window_; // frames first_ .. first_ + size - 1
+  std::deque<bool> wanted_;          // whether each frame of window_ is to be filtered
   std::size_t first_ = 0;            // sequence index of window_.front()
+  std::uint32_t width_ = 0, height_ = 0; // size of the first frame pushed
   std::size_t pushed_ = 0;
   std::size_t emitted_ = 0;
   std::vector<float> last_weights_;

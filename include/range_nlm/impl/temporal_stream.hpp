@@ -24,11 +24,17 @@ template <typename PointT>
 typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
+  if (!wanted_[t - first_])
+    return nullptr;
   const std::size_t lo = t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0;
   const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
   std::deque<CloudConstPtr> frames;
-  for (std::size_t k = std::max(lo, first_); k <= hi; ++k)
+  for (std::size_t k = std::max(lo, first_); k <= hi; ++k) {
+    if (!window_[k - first_])
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null but frame " +
+                                  std::to_string(t) + " is to be filtered with it");
     frames.push_back(window_[k - first_]);
+  }
   filter_.setParameters(parameters_);
   filter_.setFrames(frames, t - std::max(lo, first_));
   CloudPtr out(new PointCloud);
@@ -46,22 +52,30 @@ TemporalStream<PointT>::dropBefore(std::size_t t)
 {
   while (!window_.empty() && first_ < t) {
     window_.pop_front();
+    wanted_.pop_front();
     ++first_;
   }
 }
 
 template <typename PointT>
 std::vector<typename TemporalStream<PointT>::CloudPtr>
-TemporalStream<PointT>::push(const CloudConstPtr& frame)
+TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
 {
-  if (!frame)
+  if (!frame && wanted)
     throw std::invalid_argument("range_nlm: pushed frame is null");
-  if (!window_.empty() && (frame->width != window_.front()->width || frame->height != window_.front()->height))
-    throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) + " is " +
-                                std::to_string(frame->width) + " x " + std::to_string(frame->height) +
-                                " but the sequence is " + std::to_string(window_.front()->width) + " x " +
-                                std::to_string(window_.front()->height));
+  if (frame) {
+    if (width_ == 0 && height_ == 0) {
+      width_ = frame->width;
+      height_ = frame->height;
+    } else if (frame->width != width_ || frame->height != height_) {
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) + " is " +
+                                  std::to_string(frame->width) + " x " + std::to_string(frame->height) +
+                                  " but the sequence is " + std::to_string(width_) + " x " +
+                                  std::to_string(height_));
+    }
+  }
   window_.push_back(frame);
+  wanted_.push_back(wanted);
   ++pushed_;
   std::vector<CloudPtr> ready;
   // Frame t is ready once t + r (causal: t) has been pushed.
@@ -87,6 +101,7 @@ TemporalStream<PointT>::flush()
     dropBefore(keep_from);
   }
   window_.clear();
+  wanted_.clear();
   first_ = pushed_;
   return ready;
 }

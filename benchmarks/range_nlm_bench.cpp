@@ -1,0 +1,1240 @@
+// range_nlm_bench: times range_nlm (fast and direct evaluation) against PCL's
+// FastBilateralFilterOMP and MovingLeastSquares in one run, on the same frames, in the paper's
+// configurations, each method in a child process of its own (its own peak memory) and the
+// methods of a configuration taking turns (a warm-up call, then the timed one).
+#include "bench_support.h"
+#include "peers.h"
+#include "quality_comparison.h"
+#include "temporal_comparison.h"
+#include "cli/cli.h"
+
+#include <range_nlm/core/pipeline.h>
+#include <range_nlm/nonlocal_means_filter.h>
+#include <range_nlm/temporal_nonlocal_means_filter.h>
+#include <range_nlm/temporal_stream.h>
+
+#include <pcl/filters/fast_bilateral_omp.h>
+#include <pcl/pcl_config.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/surface/mls.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <deque>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#ifndef RANGE_NLM_DATA_DIR
+#error "RANGE_NLM_DATA_DIR must name the directory of the shipped frames"
+#endif
+
+namespace po = boost::program_options;
+using namespace range_nlm;
+using namespace range_nlm::tools;
+namespace bench = range_nlm::tools::bench;
+
+namespace
+{
+
+const char* const kUsage =
+    "Usage:\n"
+    "  range_nlm_bench [options]\n"
+    "Times range_nlm's NonLocalMeansFilter (fast and direct evaluation) and the temporal filter\n"
+    "against pcl::FastBilateralFilterOMP and pcl::MovingLeastSquares on the same frames, in the\n"
+    "paper's configurations: static 7x7 search / 5x5 patch on a 640x480 frame, and temporal\n"
+    "19x19 / 11x11 with radius 1 (3 frames) on 480x400 centre crops. Each method runs in its own\n"
+    "child process; its peak memory is the child's ru_maxrss reported by wait4. The methods of a\n"
+    "configuration take turns, --runs rounds of one turn each: an untimed warm-up run, then a\n"
+    "timed one. A change of the machine's speed then reaches all of them alike. Each method's\n"
+    "figure is the median of its timed runs. Without options it uses the frames shipped in data/.";
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+using CloudConstPtr = Cloud::ConstPtr;
+
+const std::string kDataDir = RANGE_NLM_DATA_DIR;
+
+constexpr int kStaticSearch = 7, kStaticPatch = 5;
+constexpr int kTemporalSearch = 19, kTemporalPatch = 11, kTemporalRadius = 1;
+constexpr unsigned kTemporalWidth = 480, kTemporalHeight = 400;
+constexpr float kBilateralSigmaS = 5.0f, kBilateralSigmaR = 0.03f;
+constexpr double kStaticTargetMs = 30.0, kTemporalTargetMs = 1000.0, kSequenceTargetMb = 200.0;
+
+double
+megabytes(std::uint64_t bytes)
+{
+  return static_cast<double>(bytes) / 1e6;
+}
+
+/// 0 = all cores, resolved the way the library does (OpenMP's default team size).
+int
+resolveThreads(int requested)
+{
+  if (requested > 0)
+    return requested;
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+/// Conditions of the run, printed with the results.
+struct RunInfo
+{
+  bench::MachineInfo machine;
+  std::string build;
+  double load_start = -1.0, load_end = -1.0;
+  double wall_s = 0.0;
+};
+
+struct Settings
+{
+  std::string input;
+  std::string sequence_dir;
+  bool synthetic_frames = false;
+  std::string config = "all";
+  int runs = 5;
+  int threads = 1;
+  bool all = false;
+  bool no_direct = false;
+  bool breakdown = false;
+  int sequence_memory = 0;
+  int sequence_search = kTemporalSearch;
+  int sequence_patch = kTemporalPatch;
+  double mls_radius = 0.0;
+  std::uint64_t seed = 1;
+  bool json = false;
+  std::string json_file;
+  bool quiet = false;
+  /// Preset of the range_nlm runs (and its name); search window, patch, evaluation and threads
+  /// are set per configuration.
+  std::string preset = "default";
+  FilterParameters parameters;
+};
+
+/// The benchmark's parameters for one configuration.
+FilterParameters
+parametersFor(const Settings& s, int search, int patch, Evaluation evaluation)
+{
+  FilterParameters p = s.parameters;
+  p.search_window = search;
+  p.patch_size = patch;
+  p.evaluation = evaluation;
+  p.threads = s.threads;
+  return p;
+}
+
+/// What the range_nlm runs do besides the window sizes, for the notes of the table.
+std::string
+describe(const Settings& s)
+{
+  const FilterParameters& p = s.parameters;
+  std::ostringstream d;
+  d << "preset '" << s.preset << "': " << p.iterations << " iteration(s), normals " << p.normal_window << "x"
+    << p.normal_window;
+  if (p.normal_presmooth_window > 1)
+    d << " from a " << p.normal_presmooth_window << "x" << p.normal_presmooth_window << " pre-smoothed copy";
+  if (p.normal_edge_gate > 0.0f)
+    d << ", edge gate " << p.normal_edge_gate << " sigma";
+  d << ", " << (p.bandwidth_model == BandwidthModel::range_adaptive ? "range-adaptive" : "global")
+    << " bandwidths";
+  if (p.displacement == Displacement::line_of_sight)
+    d << ", line of sight";
+  return d.str();
+}
+
+/// The frames of one configuration.
+struct Frames
+{
+  std::string label;  // e.g. "static 7x7/5x5 640x480"
+  std::string source; // where the frames come from
+  std::vector<CloudConstPtr> clouds;
+  std::size_t center = 0;
+  double mls_radius = 0.0; // search radius given to MovingLeastSquares
+  std::string mls_radius_origin;
+};
+
+/// One measured method in one configuration.
+struct Row
+{
+  std::string method;
+  std::string config;
+  unsigned width = 0, height = 0;
+  int frames = 1;
+  int threads = 0;
+  int runs = 0;
+  bool warmup = true;
+  std::string note;
+  bench::ChildResult result;
+  double median_ms = std::numeric_limits<double>::quiet_NaN();
+  double min_ms = std::numeric_limits<double>::quiet_NaN();
+  double max_ms = std::numeric_limits<double>::quiet_NaN();
+  double cpu_ms = std::numeric_limits<double>::quiet_NaN(); // median process CPU time per run
+  std::vector<double> samples_ms;
+
+  double points() const { return static_cast<double>(width) * height; }
+  double mpointsPerSecond() const
+  {
+    return result.ok ? points() / (median_ms * 1e3) : std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
+void
+progress(const Settings& s, const std::string& text)
+{
+  if (!s.quiet)
+    std::cerr << "range_nlm_bench: " << text << std::endl;
+}
+
+/// A prepared method: builds its objects (not timed) and returns the timed call.
+using Prepare = std::function<std::function<void()>()>;
+
+/// A method to time: its row (filled in by measureInterleaved) and how to prepare it.
+struct Pending
+{
+  Row row;
+  Prepare prepare;
+};
+
+Pending
+pending(const Settings& s, const std::string& method, const Frames& frames, int runs, bool warmup,
+        const std::string& note, const Prepare& prepare)
+{
+  Pending p;
+  Row& row = p.row;
+  row.method = method;
+  row.config = frames.label;
+  const Cloud& current = *frames.clouds[frames.center];
+  row.width = current.width;
+  row.height = current.height;
+  row.frames = static_cast<int>(frames.clouds.size());
+  row.threads = s.threads;
+  row.runs = runs;
+  row.warmup = warmup;
+  row.note = note;
+  p.prepare = prepare;
+  return p;
+}
+
+/// Times the methods of one configuration in turns (bench::runInterleaved), each
+/// in a child process of its own, and returns their rows in the given order.
+std::vector<Row>
+measureInterleaved(const Settings& s, const std::string& config, std::vector<Pending> methods)
+{
+  std::vector<bench::TimedMethod> timed;
+  int rounds = 0;
+  for (const Pending& p : methods) {
+    timed.push_back({p.prepare, p.row.runs, p.row.warmup});
+    rounds = std::max(rounds, p.row.runs);
+  }
+  progress(s, "timing " + std::to_string(methods.size()) + " methods [" + config + "] in turns, " +
+                  std::to_string(rounds) + " round(s) of a warm-up call and a timed call each");
+  const std::vector<bench::ChildResult> results = bench::runInterleaved(timed);
+  std::vector<Row> rows;
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    Row row = methods[k].row;
+    row.result = results[k];
+    const int runs = row.runs;
+    const std::vector<double>& v = row.result.values;
+    if (row.result.ok && v.size() == 2 * static_cast<std::size_t>(runs)) {
+      row.samples_ms.assign(v.begin(), v.begin() + runs);
+      row.median_ms = bench::median(row.samples_ms);
+      row.min_ms = *std::min_element(row.samples_ms.begin(), row.samples_ms.end());
+      row.max_ms = *std::max_element(row.samples_ms.begin(), row.samples_ms.end());
+      row.cpu_ms = bench::median(std::vector<double>(v.begin() + runs, v.end()));
+      std::ostringstream done;
+      done << "  " << row.method << ": median " << std::fixed << std::setprecision(1) << row.median_ms
+           << " ms, peak " << megabytes(row.result.peak_rss_bytes) << " MB";
+      progress(s, done.str());
+    } else if (row.result.ok) {
+      row.result.ok = false;
+      row.result.error = "incomplete timing result";
+    }
+    if (!row.result.ok)
+      progress(s, "  " + row.method + " failed: " + row.result.error);
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Prepare
+prepareStatic(const CloudConstPtr& cloud, const FilterParameters& parameters)
+{
+  return [=] {
+    auto filter = std::make_shared<NonLocalMeansFilter<pcl::PointXYZ>>();
+    filter->setParameters(parameters);
+    filter->setInputCloud(cloud);
+    auto output = std::make_shared<Cloud>();
+    return std::function<void()>([filter, output] { filter->filter(*output); });
+  };
+}
+
+Prepare
+prepareTemporal(const Frames& frames, const FilterParameters& parameters)
+{
+  std::deque<CloudConstPtr> window(frames.clouds.begin(), frames.clouds.end());
+  const std::size_t center = frames.center;
+  return [=] {
+    auto filter = std::make_shared<TemporalNonLocalMeansFilter<pcl::PointXYZ>>();
+    filter->setParameters(parameters);
+    filter->setFrames(window, center);
+    auto output = std::make_shared<Cloud>();
+    return std::function<void()>([filter, output] { filter->filter(*output); });
+  };
+}
+
+Prepare
+prepareBilateral(const CloudConstPtr& cloud, int threads)
+{
+  return [=] {
+    auto filter = bench::makeFastBilateral(kBilateralSigmaS, kBilateralSigmaR, static_cast<unsigned>(threads));
+    filter->setInputCloud(cloud);
+    auto output = std::make_shared<Cloud>();
+    return std::function<void()>([filter, output] { filter->filter(*output); });
+  };
+}
+
+Prepare
+prepareMls(const CloudConstPtr& cloud, double radius, int threads)
+{
+  return [=] {
+    auto mls = bench::makeMovingLeastSquares(radius, static_cast<unsigned>(threads));
+    auto output = std::make_shared<Cloud>();
+    return std::function<void()>([mls, cloud, output] {
+      // The index list and the k-d tree over the finite points are part of the timed call.
+      bench::setMlsInput(*mls, cloud);
+      mls->process(*output);
+    });
+  };
+}
+
+std::size_t
+finiteCount(const Cloud& cloud)
+{
+  std::size_t n = 0;
+  for (const auto& p : cloud.points)
+    n += std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  return n;
+}
+
+/// The MLS radius: the user's, or that of the disc with the area of the static search window
+/// (7x7 pixels) at the frame's median pixel spacing.
+void
+chooseMlsRadius(const Settings& s, Frames& frames)
+{
+  const Cloud& cloud = *frames.clouds[frames.center];
+  if (s.mls_radius > 0.0) {
+    frames.mls_radius = s.mls_radius;
+    frames.mls_radius_origin = "--mls-radius";
+    return;
+  }
+  const double spacing = bench::medianPixelSpacing(cloud);
+  if (!(spacing > 0.0))
+    throw InputError(frames.source + ": no two horizontally adjacent valid points; give --mls-radius");
+  const double pi = 3.14159265358979323846;
+  frames.mls_radius = std::sqrt(kStaticSearch * kStaticSearch / pi) * spacing;
+  std::ostringstream origin;
+  origin << "disc of the 7x7 window's area: 3.95 x median pixel spacing " << std::setprecision(3)
+         << spacing * 1e3 << " mm at median depth " << bench::medianDepth(cloud) << " m";
+  frames.mls_radius_origin = origin.str();
+}
+
+std::string
+mlsNote(const Frames& frames)
+{
+  std::ostringstream note;
+  note << "order 2, k-d tree over the " << finiteCount(*frames.clouds[frames.center])
+       << " finite points (setIndices), radius " << std::setprecision(3) << frames.mls_radius * 1e3 << " mm ("
+       << frames.mls_radius_origin << ")";
+  return note.str();
+}
+
+std::vector<Row>
+benchStatic(const Settings& s, const Frames& frames)
+{
+  const CloudConstPtr& cloud = frames.clouds[frames.center];
+  std::vector<Pending> methods;
+  methods.push_back(
+      pending(s, "range_nlm fast", frames, s.runs, true, describe(s) + "; Evaluation::fast",
+              prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast))));
+  if (!s.no_direct)
+    methods.push_back(
+        pending(s, "range_nlm direct", frames, s.runs, true, describe(s) + "; Evaluation::direct",
+                prepareStatic(cloud, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::direct))));
+  methods.push_back(pending(s, "pcl FastBilateralFilterOMP", frames, s.runs, true,
+                            "sigma_s 5, sigma_r 0.03; fills NaN pixels with a finite z (PCL #1027)",
+                            prepareBilateral(cloud, s.threads)));
+  methods.push_back(pending(s, "pcl MovingLeastSquares", frames, s.runs, true, mlsNote(frames),
+                            prepareMls(cloud, frames.mls_radius, s.threads)));
+  return measureInterleaved(s, frames.label, std::move(methods));
+}
+
+std::vector<Row>
+benchTemporal(const Settings& s, const Frames& frames)
+{
+  const CloudConstPtr& cloud = frames.clouds[frames.center];
+  std::vector<Pending> methods;
+  const FilterParameters fast = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast);
+  const FilterParameters direct = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::direct);
+  methods.push_back(
+      pending(s, "range_nlm temporal fast", frames, s.runs, true,
+              "TemporalNonLocalMeansFilter, centre of 3 frames; " + describe(s) + "; Evaluation::fast",
+              prepareTemporal(frames, fast)));
+  if (s.no_direct) {
+    // the reference path is left out (--no-direct)
+  } else if (s.all)
+    methods.push_back(pending(s, "range_nlm temporal direct", frames, s.runs, true,
+                              "TemporalNonLocalMeansFilter; " + describe(s) + "; Evaluation::direct",
+                              prepareTemporal(frames, direct)));
+  else
+    methods.push_back(pending(s, "range_nlm temporal direct", frames, 1, false,
+                              "Evaluation::direct, timed once without warm-up (--all for warm-up + --runs)",
+                              prepareTemporal(frames, direct)));
+  Frames single = frames;
+  single.clouds = {cloud};
+  single.center = 0;
+  methods.push_back(pending(s, "pcl FastBilateralFilterOMP", single, s.runs, true,
+                            "centre frame alone (no temporal neighbours), sigma_s 5, sigma_r 0.03",
+                            prepareBilateral(cloud, s.threads)));
+  methods.push_back(pending(s, "pcl MovingLeastSquares", single, s.runs, true,
+                            "centre frame alone; " + mlsNote(frames),
+                            prepareMls(cloud, frames.mls_radius, s.threads)));
+  return measureInterleaved(s, frames.label, std::move(methods));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Phase breakdown: runFilter itself with a StageObserver that times each of its phases, so the
+// breakdown cannot drift from the pipeline. The end-to-end filter() is timed in the same rounds;
+// the difference is the adaptors' conversions.
+
+/// One timed phase.
+struct Step
+{
+  std::string name;
+  /// Runs once per filter() call (setup) or once per iteration (then timed per iteration).
+  bool per_iteration = true;
+  /// Part of the fast path (false for the direct evaluation and the end-to-end call).
+  bool fast_path = true;
+  bool end_to_end = false;
+};
+
+struct Breakdown
+{
+  std::string config;
+  int iterations = 1;
+  std::vector<Step> steps;
+  bench::ChildResult result;
+  std::vector<double> median_ms; // per step
+};
+
+Viewpoint
+viewpointOf(const Cloud& cloud)
+{
+  return Viewpoint{cloud.sensor_origin_[0], cloud.sensor_origin_[1], cloud.sensor_origin_[2]};
+}
+
+/// Sums the time of each phase over one runFilter call.
+class StageTimer : public StageObserver
+{
+public:
+  void begin(Stage, int) override { start_ = std::chrono::steady_clock::now(); }
+  void end(Stage stage, int) override { ms[static_cast<int>(stage)] += millisecondsSince(start_); }
+  std::array<double, kStageCount> ms{};
+
+private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// The phases runFilter goes through with `p`, in order, each once (in the global model the
+/// normals phase is the raw fit before the bandwidths plus the gated fit after the pre-smoothing).
+std::vector<Stage>
+stagesOf(const FilterParameters& p, bool temporal)
+{
+  const bool adaptive = p.bandwidth_model == BandwidthModel::range_adaptive;
+  std::vector<Stage> stages;
+  if (temporal)
+    stages.push_back(Stage::neighbour_frames);
+  if (!adaptive)
+    stages.push_back(Stage::normals);
+  stages.push_back(Stage::bandwidths);
+  stages.push_back(Stage::noise_maps);
+  if (p.normal_presmooth_window > 1)
+    stages.push_back(Stage::presmoothing);
+  if (adaptive)
+    stages.push_back(Stage::normals);
+  for (Stage stage : {Stage::frame_terms, Stage::offsets, Stage::displacement})
+    stages.push_back(stage);
+  return stages;
+}
+
+/// A readable label of a phase with the parameters that set its cost.
+std::string
+stageLabel(Stage stage, const FilterParameters& p, std::size_t frames)
+{
+  const auto square = [](int n) { return std::to_string(n) + "x" + std::to_string(n); };
+  switch (stage) {
+  case Stage::neighbour_frames:
+    return "neighbour frames (" + std::to_string(frames - 1) + ")";
+  case Stage::bandwidths:
+    return std::string("bandwidths (") +
+           (p.bandwidth_model == BandwidthModel::range_adaptive ? "noise profile" : "global") + ", " +
+           std::to_string(p.bandwidth_samples) + " samples)";
+  case Stage::presmoothing:
+    return "pre-smoothing " + square(p.normal_presmooth_window);
+  case Stage::normals:
+    return "normals " + square(p.normal_window) + (p.normal_edge_gate > 0.0f ? " gated" : "");
+  case Stage::offsets:
+    return "offsets fast " + square(p.search_window) + "/" + square(p.patch_size) +
+           (frames > 1 ? ", " + std::to_string(frames) + " frames" : "");
+  default:
+    return toString(stage);
+  }
+}
+
+Breakdown
+benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& p, bool with_direct)
+{
+  const std::size_t count = frames.clouds.size(), c = frames.center;
+  const bool temporal = count > 1;
+  const std::vector<Stage> stages = stagesOf(p, temporal);
+  Breakdown b;
+  b.config = frames.label;
+  b.iterations = p.iterations;
+  b.steps.push_back({"cloud -> Grid (detail::toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
+                     false, true, false});
+  for (Stage stage : stages)
+    b.steps.push_back({stageLabel(stage, p, count), stage != Stage::neighbour_frames, true, false});
+  if (with_direct)
+    b.steps.push_back({"offsets direct " + std::to_string(p.search_window) + "x" + std::to_string(p.search_window) +
+                           "/" + std::to_string(p.patch_size) + "x" + std::to_string(p.patch_size),
+                       true, false, false});
+  b.steps.push_back({std::string(temporal ? "TemporalNonLocalMeansFilter" : "NonLocalMeansFilter") +
+                         "::filter() fast, end to end, " + std::to_string(p.iterations) + " iteration(s)",
+                     false, false, true});
+  progress(s, "breakdown [" + frames.label + "], warm-up + " + std::to_string(s.runs) + " round(s)");
+  b.result = bench::runInChild([&] {
+    const Viewpoint viewpoint = viewpointOf(*frames.clouds[c]);
+    FilterParameters fast = p, direct = p;
+    fast.evaluation = Evaluation::fast;
+    direct.evaluation = Evaluation::direct;
+    std::vector<Grid> grids(count);
+    std::vector<const Grid*> pointers;
+    for (const Grid& g : grids)
+      pointers.push_back(&g);
+    Workspace workspace, direct_workspace;
+    const std::function<void()> filter =
+        temporal ? prepareTemporal(frames, fast)() : prepareStatic(frames.clouds[c], fast)();
+    // Every round runs all phases in pipeline order, so a change of machine load hits every
+    // phase alike instead of whichever phase happened to be timed at the time.
+    std::vector<std::vector<double>> samples(b.steps.size());
+    for (int round = -1; round < s.runs; ++round) { // round -1 is the warm-up
+      std::vector<double> ms;
+      auto start = std::chrono::steady_clock::now();
+      for (std::size_t k = 0; k < count; ++k)
+        detail::toGrid(*frames.clouds[k], grids[k]);
+      ms.push_back(millisecondsSince(start));
+      StageTimer timer;
+      workspace.observer = &timer;
+      runFilter(pointers, static_cast<int>(c), fast, viewpoint, {}, workspace);
+      for (Stage stage : stages) {
+        const double total = timer.ms[static_cast<int>(stage)];
+        ms.push_back(stage == Stage::neighbour_frames ? total : total / p.iterations);
+      }
+      if (with_direct) {
+        StageTimer direct_timer;
+        direct_workspace.observer = &direct_timer;
+        runFilter(pointers, static_cast<int>(c), direct, viewpoint, {}, direct_workspace);
+        ms.push_back(direct_timer.ms[static_cast<int>(Stage::offsets)] / p.iterations);
+      }
+      start = std::chrono::steady_clock::now();
+      filter();
+      ms.push_back(millisecondsSince(start));
+      if (round >= 0)
+        for (std::size_t i = 0; i < ms.size() && i < samples.size(); ++i)
+          samples[i].push_back(ms[i]);
+    }
+    std::vector<double> medians;
+    for (const std::vector<double>& sample : samples)
+      medians.push_back(bench::median(sample));
+    return medians;
+  });
+  if (b.result.ok && b.result.values.size() == b.steps.size())
+    b.median_ms = b.result.values;
+  else if (b.result.ok) {
+    b.result.ok = false;
+    b.result.error = "incomplete breakdown result";
+  }
+  if (!b.result.ok)
+    progress(s, "  breakdown failed: " + b.result.error);
+  return b;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Memory over a sequence: TemporalStream (radius 1) over N noisy copies of the input frame.
+
+struct SequenceMemory
+{
+  int frames = 0;
+  unsigned width = 0, height = 0;
+  bench::ChildResult result;
+  // From the child: outputs, most frames held, RSS after the first and the last output, median
+  // and mean ms per pushed frame.
+  double outputs = 0, max_held = 0, rss_first = 0, rss_last = 0, median_ms = 0, mean_ms = 0;
+};
+
+SequenceMemory
+benchSequence(const Settings& s, const CloudConstPtr& base)
+{
+  SequenceMemory m;
+  m.frames = s.sequence_memory;
+  m.width = base->width;
+  m.height = base->height;
+  progress(s, "sequence memory: TemporalStream radius 1, " + std::to_string(s.sequence_search) + "x" +
+                  std::to_string(s.sequence_search) + "/" + std::to_string(s.sequence_patch) + "x" +
+                  std::to_string(s.sequence_patch) + ", " + std::to_string(m.frames) + " frames of " +
+                  std::to_string(m.width) + "x" + std::to_string(m.height));
+  m.result = bench::runInChild([&] {
+    const FilterParameters p = parametersFor(s, s.sequence_search, s.sequence_patch, Evaluation::fast);
+    TemporalStream<pcl::PointXYZ> stream(kTemporalRadius, false, p);
+    std::vector<double> push_ms;
+    double outputs = 0, max_held = 0, rss_first = 0, rss_last = 0;
+    auto take = [&](const std::vector<Cloud::Ptr>& ready) {
+      for (std::size_t r = 0; r < ready.size(); ++r) {
+        ++outputs;
+        rss_last = static_cast<double>(bench::residentBytes());
+        if (outputs == 1)
+          rss_first = rss_last;
+      }
+      max_held = std::max(max_held, static_cast<double>(stream.heldFrames()));
+    };
+    for (int i = 0; i < m.frames; ++i) {
+      const CloudConstPtr frame = std::make_shared<Cloud>(bench::withFreshNoise(*base, s.seed + 1000u + i));
+      const auto start = std::chrono::steady_clock::now();
+      const std::vector<Cloud::Ptr> ready = stream.push(frame);
+      push_ms.push_back(millisecondsSince(start));
+      max_held = std::max(max_held, static_cast<double>(stream.heldFrames()));
+      take(ready);
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<Cloud::Ptr> rest = stream.flush();
+    const double flush_ms = millisecondsSince(start);
+    take(rest);
+    double total = flush_ms;
+    for (double v : push_ms)
+      total += v;
+    return std::vector<double>{outputs,         max_held, rss_first, rss_last, bench::median(push_ms),
+                               total / m.frames};
+  });
+  if (m.result.ok && m.result.values.size() == 6) {
+    m.outputs = m.result.values[0];
+    m.max_held = m.result.values[1];
+    m.rss_first = m.result.values[2];
+    m.rss_last = m.result.values[3];
+    m.median_ms = m.result.values[4];
+    m.mean_ms = m.result.values[5];
+  } else if (m.result.ok) {
+    m.result.ok = false;
+    m.result.error = "incomplete result";
+  }
+  if (!m.result.ok)
+    progress(s, "  sequence memory failed: " + m.result.error);
+  return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frames.
+
+CloudConstPtr
+loadXyz(const std::string& path)
+{
+  const LoadedCloud loaded = loadCloud(path);
+  return std::make_shared<Cloud>(xyzFromBlob(loaded, path));
+}
+
+std::string
+sizeText(const Cloud& c)
+{
+  return std::to_string(c.width) + "x" + std::to_string(c.height);
+}
+
+Frames
+staticFrames(const Settings& s, const CloudConstPtr& input)
+{
+  Frames f;
+  f.clouds = {input};
+  f.label = "static " + std::to_string(kStaticSearch) + "x" + std::to_string(kStaticSearch) + "/" +
+            std::to_string(kStaticPatch) + "x" + std::to_string(kStaticPatch) + " " + sizeText(*input);
+  f.source = "'" + s.input + "'";
+  chooseMlsRadius(s, f);
+  return f;
+}
+
+Frames
+temporalFrames(const Settings& s, const CloudConstPtr& input)
+{
+  Frames f;
+  const int count = 2 * kTemporalRadius + 1;
+  if (s.synthetic_frames) {
+    const Cloud crop = bench::cropCentre(*input, kTemporalWidth, kTemporalHeight, "'" + s.input + "'");
+    for (int k = 0; k < count; ++k)
+      f.clouds.push_back(std::make_shared<Cloud>(bench::withFreshNoise(crop, s.seed + k)));
+    f.source = "'" + s.input + "' centre crop with fresh noise (seeds " + std::to_string(s.seed) + ".." +
+               std::to_string(s.seed + count - 1) + ")";
+  } else {
+    std::vector<std::string> files;
+    try {
+      files = listFrames(s.sequence_dir);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--sequence-dir: ") + e.what());
+    }
+    if (files.size() < static_cast<std::size_t>(count))
+      throw InputError("--sequence-dir '" + s.sequence_dir + "' holds " + std::to_string(files.size()) +
+                       " .pcd frame(s); the temporal configuration needs " + std::to_string(count) +
+                       " (or use --synthetic-frames)");
+    for (int k = 0; k < count; ++k) {
+      const CloudConstPtr frame = loadXyz(files[static_cast<std::size_t>(k)]);
+      f.clouds.push_back(std::make_shared<Cloud>(bench::cropCentre(
+          *frame, kTemporalWidth, kTemporalHeight, "'" + files[static_cast<std::size_t>(k)] + "'")));
+    }
+    f.source = "first " + std::to_string(count) + " frames of '" + s.sequence_dir + "', centre crops";
+  }
+  f.center = static_cast<std::size_t>(kTemporalRadius);
+  f.label = "temporal " + std::to_string(kTemporalSearch) + "x" + std::to_string(kTemporalSearch) + "/" +
+            std::to_string(kTemporalPatch) + "x" + std::to_string(kTemporalPatch) +
+            " r=" + std::to_string(kTemporalRadius) + " " + sizeText(*f.clouds[f.center]);
+  chooseMlsRadius(s, f);
+  return f;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Report.
+
+struct Target
+{
+  std::string name;
+  double value = 0.0, limit = 0.0;
+  std::string unit;
+  /// How value is compared with limit, as printed: "<=" or "<".
+  std::string relation;
+  /// What the limit is ("target" or the method compared with).
+  std::string limit_name;
+  bool met = false;
+};
+
+const Row*
+findRow(const std::vector<Row>& rows, const std::string& method, const std::string& config_prefix)
+{
+  for (const Row& r : rows)
+    if (r.method == method && r.config.compare(0, config_prefix.size(), config_prefix) == 0 && r.result.ok)
+      return &r;
+  return nullptr;
+}
+
+std::vector<Target>
+evaluateTargets(const std::vector<Row>& rows, const SequenceMemory* sequence)
+{
+  std::vector<Target> targets;
+  const Row* fast = findRow(rows, "range_nlm fast", "static");
+  const Row* fbf = findRow(rows, "pcl FastBilateralFilterOMP", "static");
+  if (fast)
+    targets.push_back({"static fast median ms/frame (" + fast->config + ")", fast->median_ms, kStaticTargetMs,
+                       "ms", "<=", "target", fast->median_ms <= kStaticTargetMs});
+  if (fast && fbf)
+    targets.push_back({"static fast vs FastBilateralFilterOMP, same run", fast->median_ms, fbf->median_ms,
+                       "ms", "<=", "FastBilateralFilterOMP", fast->median_ms <= fbf->median_ms});
+  const Row* temporal = findRow(rows, "range_nlm temporal fast", "temporal");
+  if (temporal)
+    targets.push_back({"temporal fast median ms/frame (" + temporal->config + ")", temporal->median_ms,
+                       kTemporalTargetMs, "ms", "<=", "target", temporal->median_ms <= kTemporalTargetMs});
+  if (sequence && sequence->result.ok) {
+    const double mb = megabytes(sequence->result.peak_rss_bytes);
+    targets.push_back({"sequence peak RSS (" + std::to_string(sequence->frames) + " frames)", mb,
+                       kSequenceTargetMb, "MB", "<", "target", mb < kSequenceTargetMb});
+  }
+  return targets;
+}
+
+std::string
+fixed(double v, int decimals)
+{
+  if (!std::isfinite(v))
+    return "-";
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << v;
+  return out.str();
+}
+
+/// `v` with `digits` significant digits, without exponent for the magnitudes of this table.
+std::string
+significant(double v, int digits)
+{
+  if (!std::isfinite(v))
+    return "-";
+  if (v == 0.0)
+    return "0";
+  const int magnitude = static_cast<int>(std::floor(std::log10(std::fabs(v))));
+  return fixed(v, std::max(0, digits - 1 - magnitude));
+}
+
+void
+printTable(const Settings& s, const RunInfo& info, const std::vector<std::string>& sources,
+           double baseline_mb, const std::vector<Row>& rows, const std::vector<Breakdown>& breakdowns,
+           const SequenceMemory* sequence, const std::vector<Target>& targets)
+{
+  std::ostream& out = std::cout;
+  out << "machine: " << info.machine.cpu_model << ", " << info.machine.usable_cpus << " usable / "
+      << info.machine.online_cpus << " online CPUs; PCL " << PCL_VERSION_PRETTY << "; " << info.build
+      << "; load average " << fixed(info.load_start, 2) << " at start, " << fixed(info.load_end, 2)
+      << " at end; " << fixed(info.wall_s, 0) << " s in all\n";
+  for (const std::string& src : sources)
+    out << src << "\n";
+  out << "timing: median of " << s.runs
+      << " timed run(s) per method, each method in its own child process, the methods of a configuration"
+         " taking turns (each turn a warm-up run, then a timed one);"
+      << " cpu ms = median process CPU time per run (all threads); Mpts/s = grid points (width x height) / "
+         "median"
+      << " time\n"
+      << "peak MB: ru_maxrss of that child (wait4), 1 MB = 10^6 bytes, includes the " << fixed(baseline_mb, 1)
+      << " MB of an idle child (process + loaded frames)\n\n";
+
+  std::size_t mw = 6, cw = 6;
+  for (const Row& r : rows) {
+    mw = std::max(mw, r.method.size());
+    cw = std::max(cw, r.config.size());
+  }
+  out << std::left << std::setw(static_cast<int>(mw)) << "method"
+      << "  " << std::setw(static_cast<int>(cw)) << "config" << std::right
+      << "  threads  runs  median ms    min ms    cpu ms  Mpts/s  peak MB\n";
+  std::vector<std::string> notes;
+  for (const Row& r : rows) {
+    out << std::left << std::setw(static_cast<int>(mw)) << r.method << "  " << std::setw(static_cast<int>(cw))
+        << r.config << std::right << "  " << std::setw(7) << r.threads << "  " << std::setw(4)
+        << (std::to_string(r.runs) + (r.warmup ? "" : "*"));
+    if (r.result.ok) {
+      out << "  " << std::setw(9) << fixed(r.median_ms, r.median_ms < 100 ? 2 : 1) << "  " << std::setw(8)
+          << fixed(r.min_ms, r.min_ms < 100 ? 2 : 1) << "  " << std::setw(8)
+          << fixed(r.cpu_ms, r.cpu_ms < 100 ? 2 : 1) << "  " << std::setw(6)
+          << significant(r.mpointsPerSecond(), 3) << "  " << std::setw(7)
+          << fixed(megabytes(r.result.peak_rss_bytes), 1);
+    } else {
+      out << "  FAILED: " << r.result.error;
+    }
+    notes.push_back(r.method + " [" + r.config + "]: " + r.note);
+    out << "  [" << notes.size() << "]\n";
+  }
+  out << "(* = no warm-up)\n";
+  for (std::size_t i = 0; i < notes.size(); ++i)
+    out << "  [" << i + 1 << "] " << notes[i] << "\n";
+
+  for (const Breakdown& b : breakdowns) {
+    out << "\nbreakdown [" << b.config << "], " << s.threads << " thread(s), " << b.iterations
+        << " iteration(s); median per phase over " << s.runs
+        << " round(s) of all phases in pipeline order, after a warm-up round:\n";
+    if (!b.result.ok) {
+      out << "  FAILED: " << b.result.error << "\n";
+      continue;
+    }
+    double once = 0.0, per_iteration = 0.0, total = std::numeric_limits<double>::quiet_NaN();
+    std::string total_name;
+    for (std::size_t i = 0; i < b.steps.size(); ++i) {
+      if (b.steps[i].end_to_end) {
+        total = b.median_ms[i];
+        total_name = b.steps[i].name;
+      } else if (b.steps[i].fast_path) {
+        (b.steps[i].per_iteration ? per_iteration : once) += b.median_ms[i];
+      }
+    }
+    const double estimate = once + b.iterations * per_iteration;
+    const std::string once_label = "setup phases (once per call)";
+    const std::string iteration_label = "phases of one iteration";
+    const std::string estimate_label =
+        "setup + " + std::to_string(b.iterations) + " x one iteration (expected filter())";
+    const std::string rest_label = "filter() minus expected (adaptor copies, noise)";
+    std::size_t nw = std::max({once_label.size(), iteration_label.size(), estimate_label.size(),
+                               rest_label.size(), total_name.size()});
+    for (const Step& step : b.steps)
+      nw = std::max(nw, step.name.size());
+    auto line = [&](const std::string& name, double ms, const std::string& tail) {
+      out << "  " << std::left << std::setw(static_cast<int>(nw)) << name << std::right << "  "
+          << std::setw(12) << fixed(ms, 2) + " ms" << tail << "\n";
+    };
+    auto share = [&](double ms) {
+      return std::isfinite(ms) && total > 0.0 ? "  " + fixed(100.0 * ms / total, 1) + " % of filter()"
+                                              : std::string();
+    };
+    for (std::size_t i = 0; i < b.steps.size(); ++i) {
+      const Step& step = b.steps[i];
+      if (step.end_to_end)
+        continue;
+      if (!step.fast_path)
+        line(step.name, b.median_ms[i], "  (not part of the fast path)");
+      else
+        line(step.name, b.median_ms[i],
+             (step.per_iteration ? "  x" + std::to_string(b.iterations) : "  x1") +
+                 share(b.median_ms[i] * (step.per_iteration ? b.iterations : 1)));
+    }
+    line(once_label, once, share(once));
+    line(iteration_label, per_iteration,
+         "  x" + std::to_string(b.iterations) + share(per_iteration * b.iterations));
+    line(estimate_label, estimate, share(estimate));
+    line(total_name, total, "");
+    line(rest_label, total - estimate, share(total - estimate));
+  }
+
+  if (sequence) {
+    out << "\nsequence memory: TemporalStream radius " << kTemporalRadius << ", " << s.sequence_search << "x"
+        << s.sequence_search << "/" << s.sequence_patch << "x" << s.sequence_patch << ", " << sequence->frames
+        << " frames of " << sequence->width << "x" << sequence->height << " (input + fresh noise), "
+        << s.threads << " thread(s)\n";
+    if (!sequence->result.ok) {
+      out << "  FAILED: " << sequence->result.error << "\n";
+    } else {
+      out << "  peak RSS (ru_maxrss via wait4): " << fixed(megabytes(sequence->result.peak_rss_bytes), 1)
+          << " MB; RSS after the first output " << fixed(sequence->rss_first / 1e6, 1)
+          << " MB, after the last " << fixed(sequence->rss_last / 1e6, 1) << " MB; at most "
+          << fixed(sequence->max_held, 0) << " frames held between pushes; " << fixed(sequence->outputs, 0)
+          << " frames out; " << fixed(sequence->mean_ms, 1) << " ms/frame\n";
+    }
+  }
+
+  if (!targets.empty()) {
+    out << "\ntargets:\n";
+    for (const Target& t : targets)
+      out << "  " << (t.met ? "met    " : "MISSED ") << t.name << ": " << fixed(t.value, 1) << " " << t.unit
+          << " (needs " << t.relation << " " << t.limit_name << " " << fixed(t.limit, 1) << " " << t.unit
+          << ")\n";
+  }
+}
+
+void
+printJson(std::ostream& out, const Settings& s, const RunInfo& info, const std::vector<std::string>& sources,
+          double baseline_mb, const std::vector<Row>& rows, const std::vector<Breakdown>& breakdowns,
+          const SequenceMemory* sequence, const std::vector<Target>& targets)
+{
+  using bench::jsonNumber;
+  using bench::jsonString;
+  out << "{\"tool\": \"range_nlm_bench\", \"machine\": {\"cpu_model\": " << jsonString(info.machine.cpu_model)
+      << ", \"usable_cpus\": " << info.machine.usable_cpus
+      << ", \"online_cpus\": " << info.machine.online_cpus
+      << ", \"load_average_start\": " << jsonNumber(info.load_start)
+      << ", \"load_average_end\": " << jsonNumber(info.load_end)
+      << "}, \"wall_s\": " << jsonNumber(info.wall_s) << ", \"build\": " << jsonString(info.build)
+      << ", \"pcl_version\": " << jsonString(PCL_VERSION_PRETTY) << ", \"settings\": {\"runs\": " << s.runs
+      << ", \"threads\": " << s.threads << ", \"warmup\": true, \"input\": " << jsonString(s.input)
+      << ", \"all\": " << (s.all ? "true" : "false") << "}, \"frames\": [";
+  for (std::size_t i = 0; i < sources.size(); ++i)
+    out << (i ? ", " : "") << jsonString(sources[i]);
+  out << "], \"memory_measure\": \"ru_maxrss of a forked child per method, via wait4; MB = 1e6 bytes\""
+      << ", \"idle_child_peak_mb\": " << jsonNumber(baseline_mb) << ", \"results\": [";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
+    out << (i ? ", " : "") << "{\"method\": " << jsonString(r.method)
+        << ", \"config\": " << jsonString(r.config) << ", \"width\": " << r.width
+        << ", \"height\": " << r.height << ", \"frames\": " << r.frames << ", \"threads\": " << r.threads
+        << ", \"runs\": " << r.runs << ", \"warmup\": " << (r.warmup ? "true" : "false")
+        << ", \"ok\": " << (r.result.ok ? "true" : "false");
+    if (r.result.ok) {
+      out << ", \"median_ms\": " << jsonNumber(r.median_ms) << ", \"min_ms\": " << jsonNumber(r.min_ms)
+          << ", \"cpu_ms\": " << jsonNumber(r.cpu_ms) << ", \"max_ms\": " << jsonNumber(r.max_ms)
+          << ", \"mpoints_per_s\": " << jsonNumber(r.mpointsPerSecond())
+          << ", \"peak_mb\": " << jsonNumber(megabytes(r.result.peak_rss_bytes)) << ", \"samples_ms\": [";
+      for (std::size_t k = 0; k < r.samples_ms.size(); ++k)
+        out << (k ? ", " : "") << jsonNumber(r.samples_ms[k]);
+      out << "]";
+    } else {
+      out << ", \"error\": " << jsonString(r.result.error);
+    }
+    out << ", \"note\": " << jsonString(r.note) << "}";
+  }
+  out << "], \"breakdown\": [";
+  for (std::size_t i = 0; i < breakdowns.size(); ++i) {
+    const Breakdown& b = breakdowns[i];
+    out << (i ? ", " : "") << "{\"config\": " << jsonString(b.config)
+        << ", \"ok\": " << (b.result.ok ? "true" : "false");
+    if (b.result.ok) {
+      out << ", \"iterations\": " << b.iterations << ", \"phases\": [";
+      for (std::size_t k = 0; k < b.steps.size(); ++k)
+        out << (k ? ", " : "") << "{\"name\": " << jsonString(b.steps[k].name)
+            << ", \"median_ms\": " << jsonNumber(b.median_ms[k])
+            << ", \"per_iteration\": " << (b.steps[k].per_iteration ? "true" : "false")
+            << ", \"fast_path\": " << (b.steps[k].fast_path ? "true" : "false")
+            << ", \"end_to_end\": " << (b.steps[k].end_to_end ? "true" : "false") << "}";
+      out << "]";
+    } else {
+      out << ", \"error\": " << jsonString(b.result.error);
+    }
+    out << "}";
+  }
+  out << "], \"sequence_memory\": ";
+  if (!sequence) {
+    out << "null";
+  } else {
+    out << "{\"frames\": " << sequence->frames << ", \"width\": " << sequence->width
+        << ", \"height\": " << sequence->height << ", \"radius\": " << kTemporalRadius
+        << ", \"search_window\": " << s.sequence_search << ", \"patch_size\": " << s.sequence_patch
+        << ", \"threads\": " << s.threads << ", \"ok\": " << (sequence->result.ok ? "true" : "false");
+    if (sequence->result.ok)
+      out << ", \"peak_mb\": " << jsonNumber(megabytes(sequence->result.peak_rss_bytes))
+          << ", \"rss_after_first_output_mb\": " << jsonNumber(sequence->rss_first / 1e6)
+          << ", \"rss_after_last_output_mb\": " << jsonNumber(sequence->rss_last / 1e6)
+          << ", \"max_frames_held\": " << jsonNumber(sequence->max_held)
+          << ", \"frames_out\": " << jsonNumber(sequence->outputs)
+          << ", \"mean_ms_per_frame\": " << jsonNumber(sequence->mean_ms);
+    else
+      out << ", \"error\": " << jsonString(sequence->result.error);
+    out << "}";
+  }
+  out << ", \"targets\": [";
+  for (std::size_t i = 0; i < targets.size(); ++i)
+    out << (i ? ", " : "") << "{\"name\": " << jsonString(targets[i].name)
+        << ", \"value\": " << jsonNumber(targets[i].value)
+        << ", \"relation\": " << jsonString(targets[i].relation)
+        << ", \"limit\": " << jsonNumber(targets[i].limit)
+        << ", \"limit_name\": " << jsonString(targets[i].limit_name)
+        << ", \"unit\": " << jsonString(targets[i].unit)
+        << ", \"met\": " << (targets[i].met ? "true" : "false") << "}";
+  out << "]}" << std::endl;
+}
+
+int
+run(int argc, char** argv)
+{
+  const std::string default_input = kDataDir + "/milk_cartoon_all_small_clorox.pcd";
+  const std::string default_sequence = kDataDir + "/kinect-sequence";
+  po::options_description options("Options");
+  // clang-format off
+  options.add_options()
+    ("help,h", "print this help")
+    ("input", po::value<std::string>()->default_value(default_input),
+     "organized PCD frame of the static configuration (and of --synthetic-frames, --sequence-memory)")
+    ("sequence-dir", po::value<std::string>()->default_value(default_sequence),
+     "directory whose first 3 .pcd frames (name order), cropped to their centre 480x400, form the temporal configuration")
+    ("synthetic-frames", "temporal configuration: 3 copies of the --input centre crop with fresh noise instead of --sequence-dir")
+    ("config", po::value<std::string>()->default_value("all"), "configurations to time: all, static or temporal")
+    ("preset", po::value<std::string>()->default_value("default"),
+     "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
+    ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")
+    ("runs", po::value<int>()->default_value(5), "timed runs per method, each right after an untimed warm-up run; the median is reported")
+    ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
+    ("all", "also give the temporal direct path --runs runs with warm-ups (default: timed once without one, it is very slow)")
+    ("no-direct", "leave out the direct (reference) evaluation, which takes minutes in the temporal configuration")
+    ("breakdown", "time the kernel phases (normals, pre-smoothing, bandwidths, offsets) of each configuration")
+    ("sequence-memory", po::value<int>()->default_value(0),
+     "N > 0: run TemporalStream (radius 1) over N noisy copies of --input and report its peak memory; 0 = off")
+    ("sequence-search", po::value<int>()->default_value(kTemporalSearch), "search window S of the --sequence-memory run")
+    ("sequence-patch", po::value<int>()->default_value(kTemporalPatch), "patch size P of the --sequence-memory run")
+    ("mls-radius", po::value<double>()->default_value(0.0),
+     "MovingLeastSquares search radius in cloud units; 0 = the radius of a disc with the 7x7 window's area at the frame's median pixel spacing")
+    ("seed", po::value<std::uint64_t>()->default_value(1), "seed of the fresh noise of generated frames")
+    ("json", "print one JSON object instead of the table")
+    ("json-file", po::value<std::string>(), "also write that JSON object to this file")
+    ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
+    ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
+    ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
+    ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
+    ("quiet,q", "no progress lines on stderr");
+  // clang-format on
+  po::positional_options_description positional;
+  po::variables_map vm;
+  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
+    return 0;
+
+  if (vm.count("quality") || vm.count("temporal-comparison")) {
+    const bool json = vm.count("json") > 0;
+    std::ostringstream sink;
+    std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
+    std::ostringstream report, json_text;
+    if (vm.count("quality")) {
+      quality::Options q = quality::defaultOptions();
+      q.threads = vm["threads"].as<int>();
+      int w = 0, h = 0;
+      char x = 0;
+      std::istringstream size(vm["quality-size"].as<std::string>());
+      if (!(size >> w >> x >> h) || x != 'x' || w < 16 || h < 16)
+        throw UsageError("--quality-size '" + vm["quality-size"].as<std::string>() + "' is invalid: expected WxH, at least 16x16");
+      for (auto& scenario : q.scenarios)
+        scenario.width = w, scenario.height = h;
+      const auto rows = quality::run(q, log);
+      quality::printJson(rows, json_text);
+      if (json)
+        quality::printJson(rows, report);
+      else
+        quality::printTable(rows, report);
+    } else {
+      temporal::Options t;
+      t.frames = vm["temporal-frames"].as<int>();
+      t.threads = vm["threads"].as<int>();
+      if (t.frames < 3)
+        throw UsageError("--temporal-frames must be at least 3");
+      const auto rows = temporal::run(t, log);
+      temporal::printJson(rows, json_text);
+      if (json)
+        temporal::printJson(rows, report);
+      else
+        temporal::printTable(rows, t, report);
+    }
+    std::cout << report.str();
+    if (vm.count("json-file")) {
+      std::ofstream file(vm["json-file"].as<std::string>());
+      file << json_text.str();
+      if (!file)
+        throw InputError("cannot write '" + vm["json-file"].as<std::string>() + "'");
+    }
+    return 0;
+  }
+
+  Settings s;
+  s.input = vm["input"].as<std::string>();
+  s.sequence_dir = vm["sequence-dir"].as<std::string>();
+  s.synthetic_frames = vm.count("synthetic-frames") > 0;
+  s.config = vm["config"].as<std::string>();
+  s.preset = vm["preset"].as<std::string>();
+  try {
+    s.parameters = FilterParameters::preset(s.preset);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("--preset: ") + e.what());
+  }
+  const int iterations = vm["iterations"].as<int>();
+  if (iterations < 0)
+    throw UsageError("--iterations " + std::to_string(iterations) +
+                     " is invalid: must be >= 1 (0 = the preset's)");
+  if (iterations > 0)
+    s.parameters.iterations = iterations;
+  s.runs = vm["runs"].as<int>();
+  const int threads = vm["threads"].as<int>();
+  s.all = vm.count("all") > 0;
+  s.no_direct = vm.count("no-direct") > 0;
+  if (s.all && s.no_direct)
+    throw UsageError("--all and --no-direct contradict each other (--all times the direct path more often)");
+  s.breakdown = vm.count("breakdown") > 0;
+  s.sequence_memory = vm["sequence-memory"].as<int>();
+  s.sequence_search = vm["sequence-search"].as<int>();
+  s.sequence_patch = vm["sequence-patch"].as<int>();
+  s.mls_radius = vm["mls-radius"].as<double>();
+  s.seed = vm["seed"].as<std::uint64_t>();
+  s.json = vm.count("json") > 0;
+  if (vm.count("json-file")) {
+    s.json_file = vm["json-file"].as<std::string>();
+    // Fail now rather than after a long run.
+    if (!std::ofstream(s.json_file, std::ios::app))
+      throw UsageError("--json-file '" + s.json_file + "': cannot open the file for writing");
+  }
+  s.quiet = vm.count("quiet") > 0;
+  if (s.config != "all" && s.config != "static" && s.config != "temporal")
+    throw UsageError("--config '" + s.config + "' is invalid: expected all, static or temporal");
+  if (s.runs < 1 || s.runs > 1000)
+    throw UsageError("--runs " + std::to_string(s.runs) + " is invalid: must be 1..1000");
+  if (threads < 0 || threads > 1024)
+    throw UsageError("--threads " + std::to_string(threads) + " is invalid: must be 0 (all cores) .. 1024");
+  if (s.sequence_memory < 0)
+    throw UsageError("--sequence-memory " + std::to_string(s.sequence_memory) + " is invalid: must be >= 0");
+  if (!std::isfinite(s.mls_radius) || s.mls_radius < 0.0) {
+    std::ostringstream msg;
+    msg << "--mls-radius " << s.mls_radius << " is invalid: must be >= 0 (0 = automatic)";
+    throw UsageError(msg.str());
+  }
+  if (s.sequence_search < 1 || s.sequence_search % 2 == 0)
+    throw UsageError("--sequence-search " + std::to_string(s.sequence_search) +
+                     " is invalid: must be odd and >= 1");
+  if (s.sequence_patch < 1 || s.sequence_patch % 2 == 0)
+    throw UsageError("--sequence-patch " + std::to_string(s.sequence_patch) +
+                     " is invalid: must be odd and >= 1");
+  s.threads = resolveThreads(threads);
+
+  RunInfo info;
+  const auto start = std::chrono::steady_clock::now();
+  info.load_start = bench::loadAverage();
+#ifdef NDEBUG
+  info.build = "optimised build (NDEBUG)";
+#else
+  info.build = "DEBUG build (assertions on): timings are not representative";
+  progress(s, "warning: this is not a Release build; timings are not representative");
+#endif
+  info.machine = bench::machineInfo();
+
+  // Frames are prepared in this process before any measurement; this process never runs
+  // OpenMP code, so every child starts with a clean OpenMP runtime.
+  const CloudConstPtr input = loadXyz(s.input);
+  const bool do_static = s.config != "temporal", do_temporal = s.config != "static";
+  std::vector<std::string> sources;
+  std::vector<Frames> configs;
+  if (do_static) {
+    configs.push_back(staticFrames(s, input));
+    sources.push_back("static frames: " + configs.back().source + ", " + sizeText(*input) + ", " +
+                      std::to_string(finiteCount(*input)) + " valid points");
+  }
+  if (do_temporal) {
+    try {
+      configs.push_back(temporalFrames(s, input));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(e.what());
+    }
+    sources.push_back("temporal frames: " + configs.back().source);
+  }
+
+  const bench::ChildResult idle = bench::runInChild([] { return std::vector<double>{}; });
+  const double baseline_mb = megabytes(idle.peak_rss_bytes);
+
+  std::vector<Row> rows;
+  std::vector<Breakdown> breakdowns;
+  for (const Frames& f : configs) {
+    const bool temporal = f.clouds.size() > 1;
+    const std::vector<Row> part = temporal ? benchTemporal(s, f) : benchStatic(s, f);
+    rows.insert(rows.end(), part.begin(), part.end());
+  }
+  if (s.breakdown)
+    for (const Frames& f : configs) {
+      const bool temporal = f.clouds.size() > 1;
+      breakdowns.push_back(
+          temporal
+              ? benchBreakdown(s, f, parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast),
+                               false)
+              : benchBreakdown(s, f, parametersFor(s, kStaticSearch, kStaticPatch, Evaluation::fast), !s.no_direct));
+    }
+  std::unique_ptr<SequenceMemory> sequence;
+  if (s.sequence_memory > 0)
+    sequence = std::make_unique<SequenceMemory>(benchSequence(s, input));
+
+  const std::vector<Target> targets = evaluateTargets(rows, sequence.get());
+  info.load_end = bench::loadAverage();
+  info.wall_s = millisecondsSince(start) / 1e3;
+  if (!s.json_file.empty()) {
+    std::ofstream file(s.json_file);
+    printJson(file, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
+    if (!file)
+      throw InputError("--json-file '" + s.json_file + "': cannot write the file");
+  }
+  if (s.json)
+    printJson(std::cout, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
+  else
+    printTable(s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
+
+  int failed = 0;
+  for (const Row& r : rows)
+    failed += !r.result.ok;
+  for (const Breakdown& b : breakdowns)
+    failed += !b.result.ok;
+  if (sequence && !sequence->result.ok)
+    ++failed;
+  if (failed > 0)
+    throw InputError(std::to_string(failed) + " measurement(s) failed; see the report above");
+  return 0;
+}
+
+} // namespace
+
+int
+main(int argc, char** argv)
+{
+  return runTool("range_nlm_bench", [&] { return run(argc, argv); });
+}

@@ -1,0 +1,200 @@
+/// \file pipeline.h
+/// \brief The PCL-free pipeline of the non-local range filter (docs/method.md, static and
+/// temporal): normals, bandwidths, offsets and displacement on Grid frames. The pcl::Filter
+/// classes only adapt clouds to these functions.
+#pragma once
+
+#include <range_nlm/core/grid.h>
+#include <range_nlm/parameters.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace range_nlm
+{
+
+/// Sensor position the normals are oriented toward, in cloud coordinates.
+using Viewpoint = std::array<float, 3>;
+
+/// Least-squares plane normals over a `window` x `window` grid neighbourhood (PCL's
+/// solvePlaneParameters on the neighbourhood covariance), oriented toward `viewpoint`.
+/// Needs at least 3 valid neighbours; otherwise the normal is NaN. `threads` 0 = all cores
+/// (likewise for every `threads` argument below).
+NormalField
+estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads);
+/// Gated fit, so that a plane does not straddle a depth edge or a crease: a first fit leaves
+/// out neighbours whose range differs from p_i's by more than `gate[i]` (size of the grid); the
+/// second leaves out neighbours farther than `gate[i]` from the first fit's plane through p_i.
+NormalField
+estimateNormals(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                const std::vector<float>& gate);
+
+/// Edge-preserving smoothing of the range along each camera ray, used only to estimate normals:
+/// rho'_i = sum_j w_ij rho_j / sum_j w_ij over a `window` x `window` neighbourhood with
+/// w_ij = exp(-(rho_j - rho_i)^2 / (2 sigma^2)), rho = distance from the viewpoint.
+Grid
+presmoothAlongRays(const Grid& grid, int window, float sigma, const Viewpoint& viewpoint, int threads);
+/// The same with a range bandwidth per point (`sigma[i]`, size of the grid).
+Grid
+presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                   int threads);
+
+/// Automatic bandwidths (docs/method.md, bandwidths), from random valid sample points p_k:
+/// mu_d = mean of the largest distance from p_k to the points of its search window,
+/// sigma_s = mean of the standard deviation of the offsets of that window to the tangent plane.
+struct Bandwidths
+{
+  float mu_d = 0.0f;
+  float sigma_s = 0.0f;
+  /// d and s actually used (estimates scaled, or user-given values).
+  float distance = 0.0f;
+  float similarity = 0.0f;
+};
+
+/// Estimates mu_d and sigma_s; deterministic for a given seed. Throws std::invalid_argument if
+/// the grid has no valid point.
+Bandwidths
+estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
+                   std::uint64_t seed);
+
+/// Robust noise profile of a frame over range (BandwidthModel::range_adaptive): sampled windows
+/// binned by range rho (distance from the viewpoint); per bin the median range, the median
+/// plane-fit residual sigma (the square root of the smallest eigenvalue of the window's
+/// covariance) and the median window extent (largest distance from the centre) divided by rho.
+/// Values between bin centres are interpolated linearly, beyond them held constant.
+struct NoiseProfile
+{
+  std::vector<float> range, sigma, extent;
+  bool empty() const { return range.empty(); }
+  float sigmaAt(float rho) const;
+  float extentAt(float rho) const;
+};
+
+/// Estimates the noise profile from `samples` random valid points (deterministic per seed).
+/// Throws std::invalid_argument if the grid has no valid point.
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint);
+
+/// One frame of the (temporal) neighbourhood: its points, bandwidths and frame weight
+/// Psi_k = Psi_dk * Psi_sk. The static filter is the case of one frame with weight 1.
+/// Per-point bandwidths (range_adaptive) are given as maps of 1 / d^2 and 1 / s^2 indexed by
+/// the centre point i; when set they replace the scalar bandwidths.
+struct FrameTerm
+{
+  const Grid* grid = nullptr;
+  float distance_bandwidth = 0.0f;
+  float similarity_bandwidth = 0.0f;
+  float weight = 1.0f;
+  const std::vector<float>* inverse_distance2 = nullptr;
+  const std::vector<float>* inverse_similarity2 = nullptr;
+};
+
+/// Computes for every point i of `center` the filtered normal offset
+///   h_i = sum_k Psi_k sum_{j in N_k(i)} Phi_dk Phi_sk ((p_i - p_j) . n_i)
+///       / sum_k Psi_k sum_{j in N_k(i)} Phi_dk Phi_sk
+/// with Sim(i, j) the mean of |(p_{i+o} - p_{j+o}) . n_i|^2 over the valid patch pairs.
+/// `active` (size of the grid, may be empty = all) selects the points to compute; h is 0 for
+/// other, invalid or normal-less points. All frames must have the size of `center`.
+void
+computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+               int search_window, int patch_size, Evaluation evaluation, int threads,
+               const std::vector<unsigned char>& active, std::vector<float>& offsets);
+
+/// Moves the active points by their offsets: p' = p - h n, or along the line of sight. With
+/// `limit` (size of the grid, may be empty) each displacement is clamped to |p' - p| <= limit[i].
+/// Along the line of sight the ray step uses |cos(normal, ray)| bounded below by min_cos.
+void
+applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
+             Displacement displacement, const Viewpoint& viewpoint,
+             const std::vector<float>& limit = {}, float min_cos = 0.25f);
+
+/// Frame weights of the temporal filter: Psi_dk = (1/2)^|k - c|, Psi_sk = exp(-s_k^2 / max s^2).
+float
+temporalDistanceWeight(int k, int center);
+float
+temporalNoiseWeight(float s_k, float s_max);
+
+/// Result of a whole filter run on the kernel level.
+struct FilterRun
+{
+  Grid output;
+  /// Bandwidths per frame of the first iteration (frame order as given).
+  std::vector<Bandwidths> bandwidths;
+  /// Psi_k = Psi_dk * Psi_sk per frame of the first iteration.
+  std::vector<float> frame_weights;
+};
+
+/// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.
+/// `frames[center]` is filtered; the others are its temporal neighbours (left unchanged).
+/// `active` as in computeOffsets. Throws std::invalid_argument on invalid parameters or data.
+FilterRun
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active);
+
+/// The phases of runFilter. neighbour_frames runs once per call, the others once per iteration,
+/// in this order.
+enum class Stage
+{
+  /// Bandwidths (or noise profiles) of the temporal neighbour frames.
+  neighbour_frames,
+  /// The current frame's noise profile (range-adaptive model) or bandwidths (global model).
+  bandwidths,
+  /// Per-point noise sigma, pre-smoothing bandwidths and edge gates.
+  noise_maps,
+  /// presmoothAlongRays.
+  presmoothing,
+  /// The normal fits (raw points for the global bandwidths, then gated on the pre-smoothed copy).
+  normals,
+  /// Frame weights Psi_k and per-point 1 / d^2, 1 / s^2 maps.
+  frame_terms,
+  /// computeOffsets.
+  offsets,
+  /// applyOffsets.
+  displacement
+};
+/// Number of Stage values.
+constexpr int kStageCount = 8;
+/// A short name of the stage ("normals", "offsets", ...).
+const char*
+toString(Stage stage);
+
+/// Told where each phase of runFilter begins and ends (for timing, e.g. range_nlm_bench
+/// --breakdown). Calls come from the calling thread, never from inside a parallel region.
+class StageObserver
+{
+public:
+  virtual ~StageObserver() = default;
+  /// `iteration` counts the filter's iterations from 0 (0 for neighbour_frames).
+  virtual void begin(Stage stage, int iteration) = 0;
+  virtual void end(Stage stage, int iteration) = 0;
+};
+
+/// The buffers of a filter run, kept between runs (each filter object owns one). Runs on frames
+/// of one size then reuse memory that is already mapped: allocating and first touching the
+/// ~40 MB a VGA frame passes through cost about a sixth of the frame's time. Holds the last run's
+/// result and intermediates; its contents are not part of the interface.
+struct Workspace
+{
+  /// The input frames as grids (filled by the pcl::Filter adaptors).
+  std::vector<Grid> inputs;
+  /// The last run's result.
+  FilterRun run;
+  NormalField normals;
+  std::vector<float> offsets, sigma, limit;
+  /// Padded planes of the normal fits and of the windowed evaluation.
+  std::vector<float> normal_planes, window_planes;
+  /// If set, told where each phase of a run begins and ends. Not owned.
+  StageObserver* observer = nullptr;
+};
+
+/// runFilter with the result in `workspace.run` and every frame-sized buffer taken from
+/// `workspace`. `frames` may point into workspace.inputs; the current frame's grid there is then
+/// taken over as the result's storage (its contents are not kept) unless another frame is the
+/// same grid.
+void
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
+
+} // namespace range_nlm

@@ -1,0 +1,75 @@
+/// \file pcd_file.h
+/// \brief Checked reading and atomic writing of organized frames: PCD files (any field layout,
+/// every field kept) and 16-bit depth PNGs. Every error names the file.
+#pragma once
+
+#include <range_nlm/io/depth_image.h>
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace range_nlm
+{
+namespace io
+{
+
+/// A file that cannot be read or written, or whose contents are invalid. The message names the
+/// file and the problem.
+struct InputError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+/// A loaded PCD file: all fields plus the sensor pose from its VIEWPOINT line.
+struct LoadedCloud
+{
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+};
+/// Loads a PCD file with checks: exists, non-empty, parsable, has float x, y, z fields,
+/// width * height points, organized if `organized`. The whole header and the body's size are
+/// validated before PCL decodes the body. Errors name the file.
+LoadedCloud
+loadCloud(const std::string& path, bool organized = true);
+
+/// x, y, z of a blob (FLOAT32 or FLOAT64 fields) as an organized PointXYZ cloud, with the
+/// blob's width, height and sensor pose. Throws InputError (naming `path`) on infinite values.
+pcl::PointCloud<pcl::PointXYZ>
+xyzFromBlob(const LoadedCloud& cloud, const std::string& path);
+/// Writes x, y, z back into the blob (all other fields untouched); sets is_dense.
+void
+writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& blob);
+
+/// Saves binary PCD to a temporary name in the same directory and renames it into place, so no
+/// half-written file ever carries the final name. Throws InputError naming the file.
+void
+saveCloudAtomic(const std::string& path, const pcl::PCLPointCloud2& blob,
+                const Eigen::Vector4f& origin = Eigen::Vector4f::Zero(),
+                const Eigen::Quaternionf& orientation = Eigen::Quaternionf::Identity());
+/// Same for a typed cloud.
+template <typename PointT>
+void
+saveCloudAtomic(const std::string& path, const pcl::PointCloud<PointT>& cloud)
+{
+  pcl::PCLPointCloud2 blob;
+  pcl::toPCLPointCloud2(cloud, blob);
+  saveCloudAtomic(path, blob, cloud.sensor_origin_, cloud.sensor_orientation_);
+}
+
+/// True if `path` ends in ".png" (any case): such inputs are read as 16-bit depth images.
+bool
+isDepthImagePath(const std::string& path);
+
+/// Loads one organized frame: a PCD file through loadCloud() (all fields), or a 16-bit depth PNG
+/// back-projected with `intrinsics` into a blob with fields x, y, z. Errors name the file.
+LoadedCloud
+loadFrame(const std::string& path, const DepthIntrinsics& intrinsics);
+
+} // namespace io
+} // namespace range_nlm

@@ -1,0 +1,244 @@
+// Automatic bandwidth estimation (METHOD.md step 4).
+#include "internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace range_nlm
+{
+namespace
+{
+/// Valid points with a finite normal among `count` (branch-free and with unconditional loads, so
+/// that it vectorizes; a NaN or infinite normal fails the comparison).
+std::size_t
+countCandidates(const unsigned char* __restrict valid, const float* __restrict nx, int count)
+{
+  int found = 0;
+  for (int i = 0; i < count; ++i) {
+    const float on = valid[i], n = nx[i];
+    found += ((on > 0.0f) & (std::fabs(n) <= std::numeric_limits<float>::max())) ? 1 : 0;
+  }
+  return static_cast<std::size_t>(found);
+}
+} // namespace
+
+Bandwidths
+estimateBandwidths(const Grid& grid, const NormalField& normals, int search_window, int samples,
+                   std::uint64_t seed)
+{
+  // Candidates are the valid points with a normal, in index order; sample m is the m-th of them.
+  // They are counted per block of kBlock points (in parallel), so that the m-th is found by a
+  // binary search over the blocks and a scan of one block, without a list of all of them.
+  constexpr std::size_t kBlock = 256;
+  const std::size_t n = grid.size();
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  // Branch-free (the counting loop vectorizes): a NaN or infinite normal fails the comparison.
+  const auto candidate = [&](std::size_t i) {
+    return (grid.valid[i] != 0) & (std::fabs(normals.nx[i]) <= std::numeric_limits<float>::max());
+  };
+  std::vector<std::size_t> first(blocks + 1, 0); // candidates before each block
+#pragma omp parallel for schedule(static)
+  for (std::size_t b = 0; b < blocks; ++b)
+    first[b + 1] = countCandidates(&grid.valid[b * kBlock], &normals.nx[b * kBlock],
+                                   static_cast<int>(std::min(n, (b + 1) * kBlock) - b * kBlock));
+  for (std::size_t b = 0; b < blocks; ++b)
+    first[b + 1] += first[b];
+  const std::size_t candidates = first[blocks];
+  if (candidates == 0)
+    throw std::invalid_argument("range_nlm: the cloud has no valid point with a normal; nothing to "
+                                "estimate the bandwidths from (all points NaN?)");
+  // A 64-bit Mersenne twister with our own index mapping: identical on every platform. The
+  // samples are visited in index order (they are summed in double; the order only changes
+  // rounding far below float precision), which keeps the window reads local.
+  std::mt19937_64 rng(seed);
+  const std::size_t count = static_cast<std::size_t>(std::max(samples, 0));
+  std::vector<std::size_t> order(count);
+  for (std::size_t& m : order)
+    m = rng() % candidates;
+  std::vector<int> picks(count);
+#pragma omp parallel for schedule(static)
+  for (std::size_t s = 0; s < count; ++s) {
+    const std::size_t m = order[s];
+    const std::size_t b = static_cast<std::size_t>(std::upper_bound(first.begin(), first.end(), m) - first.begin()) - 1;
+    // Whole chunks of the block counted at once (vectorized), then the chunk holding the m-th
+    // candidate scanned point by point.
+    constexpr std::size_t kChunk = 32;
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
+    std::size_t seen = first[b], i = b * kBlock;
+    for (; i + kChunk <= end; i += kChunk) {
+      const std::size_t in_chunk = countCandidates(&grid.valid[i], &normals.nx[i], static_cast<int>(kChunk));
+      if (seen + in_chunk > m)
+        break;
+      seen += in_chunk;
+    }
+    for (;; ++i)
+      if (candidate(i) && seen++ == m)
+        break;
+    picks[s] = static_cast<int>(i);
+  }
+  std::sort(picks.begin(), picks.end());
+  // Per sample in parallel, then summed in index order (the same sums for any thread count).
+  const int r = search_window / 2;
+  std::vector<double> extent(count), spread(count);
+#pragma omp parallel for schedule(static)
+  for (std::size_t s = 0; s < count; ++s) {
+    const int k = picks[s];
+    const int u = k % grid.width, v = k / grid.width;
+    const double nx = normals.nx[k], ny = normals.ny[k], nz = normals.nz[k];
+    double max_dist2 = 0.0, sum_h = 0.0, sum_h2 = 0.0;
+    int valid = 0;
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        // Branch-free (valid and invalid points alternate at holes): invalid points add 0.
+        const int j = jv * grid.width + ju;
+        const bool ok = grid.valid[j] != 0;
+        const double dx = ok ? double(grid.x[j]) - grid.x[k] : 0.0;
+        const double dy = ok ? double(grid.y[j]) - grid.y[k] : 0.0;
+        const double dz = ok ? double(grid.z[j]) - grid.z[k] : 0.0;
+        max_dist2 = std::max(max_dist2, dx * dx + dy * dy + dz * dz);
+        const double h = dx * nx + dy * ny + dz * nz;
+        sum_h += h;
+        sum_h2 += h * h;
+        valid += ok ? 1 : 0;
+      }
+    const double mean = sum_h / valid;
+    extent[s] = std::sqrt(max_dist2);
+    spread[s] = std::sqrt(std::max(0.0, sum_h2 / valid - mean * mean));
+  }
+  double sum_mu = 0.0, sum_sigma = 0.0;
+  for (std::size_t s = 0; s < count; ++s) {
+    sum_mu += extent[s];
+    sum_sigma += spread[s];
+  }
+  Bandwidths b;
+  b.mu_d = static_cast<float>(sum_mu / samples);
+  b.sigma_s = static_cast<float>(sum_sigma / samples);
+  return b;
+}
+
+} // namespace range_nlm
+
+#include <pcl/common/eigen.h>
+
+namespace range_nlm
+{
+namespace
+{
+float
+interpolate(const std::vector<float>& xs, const std::vector<float>& ys, float x)
+{
+  if (xs.empty())
+    return 0.0f;
+  if (x <= xs.front())
+    return ys.front();
+  if (x >= xs.back())
+    return ys.back();
+  const auto it = std::upper_bound(xs.begin(), xs.end(), x);
+  const std::size_t hi = static_cast<std::size_t>(it - xs.begin()), lo = hi - 1;
+  const float t = (x - xs[lo]) / std::max(xs[hi] - xs[lo], 1e-30f);
+  return ys[lo] + t * (ys[hi] - ys[lo]);
+}
+
+float
+medianOf(std::vector<float> v)
+{
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  return v[mid];
+}
+} // namespace
+
+float
+NoiseProfile::sigmaAt(float rho) const
+{
+  return interpolate(range, sigma, rho);
+}
+
+float
+NoiseProfile::extentAt(float rho) const
+{
+  return interpolate(range, extent, rho);
+}
+
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint)
+{
+  std::vector<int> candidates;
+  candidates.reserve(grid.size());
+  for (std::size_t i = 0; i < grid.size(); ++i)
+    if (grid.valid[i])
+      candidates.push_back(static_cast<int>(i));
+  if (candidates.empty())
+    throw std::invalid_argument("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
+  std::mt19937_64 rng(seed);
+  // At least the 3 x 3 neighbourhood: a plane fit needs 4 points, and a 1 x 1 search window (which
+  // moves nothing) must not make the noise estimate impossible.
+  const int r = std::max(1, search_window / 2);
+  struct Sample
+  {
+    float rho, sigma, extent;
+  };
+  std::vector<Sample> found;
+  found.reserve(samples);
+  for (int s = 0; s < samples; ++s) {
+    const int k = candidates[rng() % candidates.size()];
+    const int u = k % grid.width, v = k / grid.width;
+    double sum[3] = {0, 0, 0}, sq[6] = {0, 0, 0, 0, 0, 0}, max_dist2 = 0.0;
+    int count = 0;
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        const int j = jv * grid.width + ju;
+        if (!grid.valid[j])
+          continue;
+        const double qx = double(grid.x[j]) - grid.x[k], qy = double(grid.y[j]) - grid.y[k],
+                     qz = double(grid.z[j]) - grid.z[k];
+        sum[0] += qx, sum[1] += qy, sum[2] += qz;
+        sq[0] += qx * qx, sq[1] += qx * qy, sq[2] += qx * qz, sq[3] += qy * qy, sq[4] += qy * qz, sq[5] += qz * qz;
+        max_dist2 = std::max(max_dist2, qx * qx + qy * qy + qz * qz);
+        ++count;
+      }
+    if (count < 4)
+      continue;
+    const double inv = 1.0 / count;
+    const double mx = sum[0] * inv, my = sum[1] * inv, mz = sum[2] * inv;
+    Eigen::Matrix3d cov;
+    cov << sq[0] * inv - mx * mx, sq[1] * inv - mx * my, sq[2] * inv - mx * mz, sq[1] * inv - mx * my,
+        sq[3] * inv - my * my, sq[4] * inv - my * mz, sq[2] * inv - mx * mz, sq[4] * inv - my * mz,
+        sq[5] * inv - mz * mz;
+    double smallest = 0.0;
+    Eigen::Vector3d normal;
+    pcl::eigen33(cov, smallest, normal);
+    const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
+    const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(rho > 0.0))
+      continue;
+    found.push_back(Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)});
+  }
+  if (found.empty())
+    throw std::invalid_argument("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
+  std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
+  const std::size_t bins = std::clamp<std::size_t>(found.size() / 64, 1, 8);
+  NoiseProfile profile;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t lo = b * found.size() / bins, hi = (b + 1) * found.size() / bins;
+    std::vector<float> rho, sigma, extent;
+    for (std::size_t i = lo; i < hi; ++i) {
+      rho.push_back(found[i].rho);
+      sigma.push_back(found[i].sigma);
+      extent.push_back(found[i].extent);
+    }
+    profile.range.push_back(medianOf(rho));
+    profile.sigma.push_back(medianOf(sigma));
+    profile.extent.push_back(medianOf(extent));
+  }
+  // Equal ranges (e.g. a fronto-parallel plane) would make interpolation degenerate.
+  for (std::size_t b = 1; b < profile.range.size(); ++b)
+    profile.range[b] = std::max(profile.range[b], std::nextafter(profile.range[b - 1], 1e30f));
+  return profile;
+}
+
+} // namespace range_nlm

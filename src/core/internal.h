@@ -1,0 +1,61 @@
+// Internals of the core shared by its translation units and by the tests (not installed).
+#pragma once
+
+#include <range_nlm/core/pipeline.h>
+
+#include <vector>
+
+namespace range_nlm
+{
+namespace detail
+{
+struct RowKernels;
+
+/// exp(x) for x <= 0, accurate to a few ulp, vectorizable; exp(x) = 0 below -87.
+float
+expNonPositive(float x);
+/// 1 / b^2 with b = 0 mapped to a huge finite value (only exact matches keep weight).
+float
+inverseSquare(float bandwidth);
+/// estimateNormals with gate pass 0 (none), 1 (range gate only) or 2 (range, then plane gate).
+NormalField
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass);
+/// The same into `normals` (resized as needed), with the padded planes in `planes` if given
+/// (resized as needed, so that repeated calls reuse it), else in memory of their own.
+void
+estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes);
+/// computeOffsets with the padded frames of the windowed evaluation in `planes` if given (resized
+/// as needed), else in memory of their own; the direct evaluation does not use it.
+void
+computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+               int search_window, int patch_size, Evaluation evaluation, int threads,
+               const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>* planes);
+/// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
+void
+copyGrid(const Grid& from, Grid& to, int threads);
+/// Thread count for OpenMP: `threads` if > 0, else the runtime's default (1 without OpenMP).
+int
+resolveThreads(int threads);
+/// The literal evaluation of the offsets (Evaluation::direct).
+void
+computeOffsetsDirect(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                     int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
+                     std::vector<float>& offsets);
+/// The windowed evaluation (Evaluation::fast) with the fastest build of the SIMD kernels.
+void
+computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                   int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
+                   std::vector<float>& offsets, std::vector<float>* planes);
+/// The windowed evaluation with the given build of the SIMD kernels; `offsets` has the size of
+/// the grid. The padded frames go into `planes` if given (resized as needed), else into memory of
+/// their own. For tests; computeOffsetsFast takes the fastest build.
+void
+computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
+                       const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets,
+                       std::vector<float>* planes = nullptr);
+
+} // namespace detail
+} // namespace range_nlm

@@ -1,0 +1,86 @@
+// The literal evaluation of the filter formula (METHOD.md, static and temporal): for every point
+// and every candidate, the patch similarity is summed pair by pair. It is the reference the fast
+// kernel is tested against.
+#include "fast_math.h"
+
+#include "internal.h"
+
+#include <cmath>
+
+namespace range_nlm
+{
+namespace detail
+{
+
+void
+computeOffsetsDirect(const Grid& center, const NormalField& normals,
+                     const std::vector<FrameTerm>& frames, int search_window, int patch_size,
+                     int threads, const std::vector<unsigned char>& active,
+                     std::vector<float>& offsets)
+{
+  const int width = center.width;
+  const int height = center.height;
+  const int r = search_window / 2;
+  const int hp = patch_size / 2;
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const int i = v * width + u;
+      offsets[i] = 0.0f;
+      if (!center.valid[i] || (!active.empty() && !active[i]) || !std::isfinite(normals.nx[i]))
+        continue;
+      const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
+      const float px = center.x[i], py = center.y[i], pz = center.z[i];
+      double num = 0.0, den = 0.0;
+      for (const FrameTerm& term : frames) {
+        const Grid& g = *term.grid;
+        const float inv_d2 = term.inverse_distance2 ? (*term.inverse_distance2)[i]
+                                                    : inverseSquareInline(term.distance_bandwidth);
+        const float inv_s2 = term.inverse_similarity2 ? (*term.inverse_similarity2)[i]
+                                                      : inverseSquareInline(term.similarity_bandwidth);
+        for (int jv = v - r; jv <= v + r; ++jv) {
+          for (int ju = u - r; ju <= u + r; ++ju) {
+            if (jv < 0 || jv >= height || ju < 0 || ju >= width)
+              continue;
+            const int j = jv * width + ju;
+            if (!g.valid[j])
+              continue;
+            double sim_sum = 0.0;
+            int pairs = 0;
+            for (int ov = -hp; ov <= hp; ++ov) {
+              for (int ou = -hp; ou <= hp; ++ou) {
+                const int av = v + ov, au = u + ou, bv = jv + ov, bu = ju + ou;
+                if (av < 0 || av >= height || au < 0 || au >= width || bv < 0 || bv >= height ||
+                    bu < 0 || bu >= width)
+                  continue;
+                const int a = av * width + au, b = bv * width + bu;
+                if (!center.valid[a] || !g.valid[b])
+                  continue;
+                const double t = (double(center.x[a]) - g.x[b]) * nx +
+                                 (double(center.y[a]) - g.y[b]) * ny +
+                                 (double(center.z[a]) - g.z[b]) * nz;
+                sim_sum += t * t;
+                ++pairs;
+              }
+            }
+            if (pairs == 0)
+              continue;
+            const double sim = sim_sum / pairs;
+            const double dx = double(px) - g.x[j], dy = double(py) - g.y[j], dz = double(pz) - g.z[j];
+            const double dist2 = dx * dx + dy * dy + dz * dz;
+            const double h = dx * nx + dy * ny + dz * nz;
+            const float arg = static_cast<float>(-(dist2 * inv_d2 + sim * inv_s2));
+            const double w = term.weight * expNonPositiveInline(arg);
+            num += w * h;
+            den += w;
+          }
+        }
+      }
+      offsets[i] = den > 0.0 ? static_cast<float>(num / den) : 0.0f;
+    }
+  }
+}
+
+} // namespace detail
+} // namespace range_nlm

@@ -1,0 +1,484 @@
+// Orchestration of the kernel: normals, bandwidths, frame weights, offsets and displacement.
+#include "fast_math.h"
+
+#include "internal.h"
+
+#include <algorithm>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace range_nlm
+{
+namespace detail
+{
+float
+expNonPositive(float x)
+{
+  return expNonPositiveInline(x);
+}
+
+float
+inverseSquare(float bandwidth)
+{
+  return inverseSquareInline(bandwidth);
+}
+
+/// applyOffsets along the normals for points [0, n), branch-free so that it vectorizes (every
+/// load is unconditional): points that do not move keep their coordinates. With Clamped, h is
+/// clamped to +/- bound[i] first.
+template <bool Clamped>
+void
+moveAlongNormals(float* __restrict x, float* __restrict y, float* __restrict z, const unsigned char* __restrict valid,
+                 const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+                 const float* __restrict hs, const float* __restrict bound, std::ptrdiff_t n)
+{
+  const float largest = std::numeric_limits<float>::max();
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const float raw = hs[i];
+    float h = raw;
+    if constexpr (Clamped) {
+      const float b = bound[i];
+      h = h < -b ? -b : h;
+      h = h > b ? b : h; // NaN stays NaN
+    }
+    const float v = valid[i];
+    const bool moves = (v > 0.0f) & (h != 0.0f) & (std::fabs(h) <= largest);
+    const float px = x[i], py = y[i], pz = z[i];
+    const float qx = px - h * nx[i], qy = py - h * ny[i], qz = pz - h * nz[i];
+    x[i] = moves ? qx : px;
+    y[i] = moves ? qy : py;
+    z[i] = moves ? qz : pz;
+  }
+}
+
+int
+resolveThreads(int threads)
+{
+  if (threads > 0)
+    return threads;
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+} // namespace detail
+
+void
+computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+               int search_window, int patch_size, Evaluation evaluation, int threads,
+               const std::vector<unsigned char>& active, std::vector<float>& offsets)
+{
+  detail::computeOffsets(center, normals, frames, search_window, patch_size, evaluation, threads, active, offsets,
+                         nullptr);
+}
+
+void
+detail::computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
+                       int search_window, int patch_size, Evaluation evaluation, int threads,
+                       const std::vector<unsigned char>& active, std::vector<float>& offsets,
+                       std::vector<float>* planes)
+{
+  for (const FrameTerm& term : frames)
+    if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height)
+      throw std::invalid_argument("range_nlm: every frame must have the size of the filtered frame");
+  if (!active.empty() && active.size() != center.size())
+    throw std::invalid_argument("range_nlm: the active mask must have one entry per point");
+  // Both evaluations write every element.
+  offsets.resize(center.size());
+  threads = detail::resolveThreads(threads);
+  if (evaluation == Evaluation::direct)
+    detail::computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
+  else
+    detail::computeOffsetsFast(center, normals, frames, search_window, patch_size, threads, active, offsets,
+                               planes);
+}
+
+void
+detail::copyGrid(const Grid& from, Grid& to, int threads)
+{
+  if (&from == &to)
+    return;
+  const std::size_t n = from.size();
+  to.width = from.width;
+  to.height = from.height;
+  to.x.resize(n);
+  to.y.resize(n);
+  to.z.resize(n);
+  to.valid.resize(n);
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+  // Blocks of 4096 points: whole cache lines of every array per iteration.
+  const std::ptrdiff_t block = 4096;
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(resolveThreads(threads))
+  for (std::ptrdiff_t b = 0; b < (size + block - 1) / block; ++b) {
+    const std::ptrdiff_t lo = b * block, count = std::min(block, size - lo);
+    std::copy_n(&from.x[lo], count, &to.x[lo]);
+    std::copy_n(&from.y[lo], count, &to.y[lo]);
+    std::copy_n(&from.z[lo], count, &to.z[lo]);
+    std::copy_n(&from.valid[lo], count, &to.valid[lo]);
+  }
+}
+
+void
+applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
+             Displacement displacement, const Viewpoint& viewpoint, const std::vector<float>& limit,
+             float min_cos)
+{
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(grid.size());
+  if (displacement == Displacement::normal) {
+    const auto move = limit.empty() ? detail::moveAlongNormals<false> : detail::moveAlongNormals<true>;
+    const std::ptrdiff_t block = 4096;
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t lo = 0; lo < n; lo += block)
+      move(&grid.x[lo], &grid.y[lo], &grid.z[lo], &grid.valid[lo], &normals.nx[lo], &normals.ny[lo],
+           &normals.nz[lo], &offsets[lo], limit.empty() ? nullptr : &limit[lo], std::min(block, n - lo));
+    return;
+  }
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    float h = offsets[i];
+    if (!limit.empty())
+      h = std::clamp(h, -limit[i], limit[i]);
+    if (!grid.valid[i] || h == 0.0f || !std::isfinite(h))
+      continue;
+    const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
+    // Stay on the camera ray and land on the plane (q - p) . n = -h.
+    float vx = grid.x[i] - viewpoint[0], vy = grid.y[i] - viewpoint[1], vz = grid.z[i] - viewpoint[2];
+    const float len = std::sqrt(vx * vx + vy * vy + vz * vz);
+    if (!(len > 0.0f))
+      continue;
+    vx /= len, vy /= len, vz /= len;
+    // At grazing angles the ray step h / cos would amplify any normal error: |cos| is bounded
+    // below by min_cos (the point still stays on its ray, so a depth image can hold it).
+    float c = vx * nx + vy * ny + vz * nz;
+    const float bound = std::max(min_cos, 1e-3f);
+    if (std::fabs(c) < bound)
+      c = c < 0.0f ? -bound : bound;
+    float t = -h / c;
+    if (!limit.empty())
+      t = std::clamp(t, -limit[i], limit[i]);
+    grid.x[i] += t * vx;
+    grid.y[i] += t * vy;
+    grid.z[i] += t * vz;
+  }
+}
+
+float
+temporalDistanceWeight(int k, int center)
+{
+  return std::ldexp(1.0f, -std::abs(k - center));
+}
+
+float
+temporalNoiseWeight(float s_k, float s_max)
+{
+  if (!(s_max > 0.0f))
+    return std::exp(-1.0f); // all frames noise-free: equal weights
+  const float ratio = s_k / s_max;
+  return std::exp(-ratio * ratio);
+}
+
+const char*
+toString(Stage stage)
+{
+  switch (stage) {
+  case Stage::neighbour_frames:
+    return "neighbour frames";
+  case Stage::bandwidths:
+    return "bandwidths";
+  case Stage::noise_maps:
+    return "noise maps";
+  case Stage::presmoothing:
+    return "pre-smoothing";
+  case Stage::normals:
+    return "normals";
+  case Stage::frame_terms:
+    return "frame terms";
+  case Stage::offsets:
+    return "offsets";
+  case Stage::displacement:
+    return "displacement";
+  }
+  return "?";
+}
+
+namespace
+{
+
+/// Tells the observer (if any) where the phases of one iteration begin and end: start() ends
+/// the running phase, if any, and begins the next; the destructor ends the last.
+class StageTracker
+{
+public:
+  StageTracker(StageObserver* observer, int iteration) : observer_(observer), iteration_(iteration) {}
+  ~StageTracker() { stop(); }
+  StageTracker(const StageTracker&) = delete;
+  StageTracker& operator=(const StageTracker&) = delete;
+
+  void start(Stage stage)
+  {
+    stop();
+    if (observer_)
+      observer_->begin(stage, iteration_);
+    stage_ = stage;
+    running_ = true;
+  }
+  void stop()
+  {
+    if (running_ && observer_)
+      observer_->end(stage_, iteration_);
+    running_ = false;
+  }
+
+private:
+  StageObserver* observer_;
+  int iteration_;
+  Stage stage_ = Stage::neighbour_frames;
+  bool running_ = false;
+};
+
+Bandwidths
+finishBandwidths(Bandwidths b, const FilterParameters& p)
+{
+  b.distance = p.distance_bandwidth > 0.0f ? p.distance_bandwidth : p.distance_scale * b.mu_d;
+  b.similarity = p.similarity_bandwidth > 0.0f ? p.similarity_bandwidth : p.similarity_scale * b.sigma_s;
+  return b;
+}
+} // namespace
+
+FilterRun
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active)
+{
+  Workspace workspace;
+  runFilter(frames, center, parameters, viewpoint, active, workspace);
+  return std::move(workspace.run);
+}
+
+void
+runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
+{
+  if (frames.empty() || center < 0 || center >= static_cast<int>(frames.size()) || !frames[center])
+    throw std::invalid_argument("range_nlm: the current frame index is outside the frame list");
+  const Grid& input = *frames[center];
+  if (input.width <= 0 || input.height <= 0)
+    throw std::invalid_argument("range_nlm: the cloud is empty or not organized (width x height = " +
+                                std::to_string(input.width) + " x " + std::to_string(input.height) + ")");
+  parameters.validateFor(input.width, input.height);
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    if (!frames[k] || frames[k]->width != input.width || frames[k]->height != input.height) {
+      std::ostringstream msg;
+      msg << "range_nlm: frame " << k << " is " << (frames[k] ? frames[k]->width : 0) << " x "
+          << (frames[k] ? frames[k]->height : 0) << " but the current frame is " << input.width << " x "
+          << input.height;
+      throw std::invalid_argument(msg.str());
+    }
+  if (input.countValid() == 0)
+    throw std::invalid_argument("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
+
+  // OpenMP treats num_threads(0) as an error; map 0 to the runtime's default.
+  const int threads = detail::resolveThreads(parameters.threads);
+
+  FilterRun& run = workspace.run;
+  run.bandwidths.clear();
+  run.frame_weights.clear();
+  const int count = static_cast<int>(frames.size());
+  const bool adaptive = parameters.bandwidth_model == BandwidthModel::range_adaptive;
+  const std::size_t n = input.size();
+  // The filtered frame starts as the input. A grid of workspace.inputs that no other frame
+  // shares is taken over instead of copied (`input` is not used after this).
+  Grid* own = nullptr;
+  for (Grid& g : workspace.inputs)
+    if (&g == &input)
+      own = &g;
+  for (int k = 0; k < count; ++k)
+    if (k != center && frames[k] == &input)
+      own = nullptr;
+  if (own)
+    std::swap(*own, run.output);
+  else
+    detail::copyGrid(input, run.output, threads);
+
+  // Range of every centre point (the per-point bandwidths are functions of it).
+  auto rangesOf = [&](const Grid& g) {
+    std::vector<float> rho(g.size(), 0.0f);
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(g.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::ptrdiff_t i = 0; i < size; ++i)
+      if (g.valid[i]) {
+        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
+        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
+    return rho;
+  };
+  auto medianRange = [&](const Grid& g, const std::vector<float>& rho) {
+    std::vector<float> valid;
+    for (std::size_t i = 0; i < g.size(); ++i)
+      if (g.valid[i])
+        valid.push_back(rho[i]);
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+    return valid[valid.size() / 2];
+  };
+
+  // Per frame: scalar bandwidths (global model) or a noise profile (range-adaptive model).
+  std::vector<Bandwidths> bandwidths(count);
+  std::vector<NoiseProfile> profiles(count);
+  std::vector<bool> usable(count, true);
+  auto estimateFrame = [&](int k, const Grid& g, const NormalField* normals, float rho_median) {
+    const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - center) * 7919u;
+    if (adaptive) {
+      profiles[k] = estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed, viewpoint);
+      Bandwidths b;
+      b.sigma_s = profiles[k].sigmaAt(rho_median);
+      b.mu_d = profiles[k].extentAt(rho_median) * rho_median;
+      bandwidths[k] = finishBandwidths(b, parameters);
+    } else {
+      // A neighbour's normals go into the centre frame's buffer, which is filled afterwards.
+      if (!normals)
+        detail::estimateNormalsGated(g, parameters.normal_window, viewpoint, threads, {}, 0, workspace.normals,
+                                     &workspace.normal_planes);
+      bandwidths[k] = finishBandwidths(estimateBandwidths(g, normals ? *normals : workspace.normals,
+                                                          parameters.search_window, parameters.bandwidth_samples, seed),
+                                       parameters);
+    }
+  };
+
+  // Neighbour frames are estimated once, from their own data (the range-adaptive model reads
+  // their profiles at the centre frame's median range).
+  StageObserver* const observer = workspace.observer;
+  if (count > 1) {
+    StageTracker stage(observer, 0);
+    stage.start(Stage::neighbour_frames);
+    const float input_rho_median = adaptive ? medianRange(run.output, rangesOf(run.output)) : 0.0f;
+    for (int k = 0; k < count; ++k) {
+      if (k == center)
+        continue;
+      try {
+        estimateFrame(k, *frames[k], nullptr, input_rho_median);
+      } catch (const std::invalid_argument&) {
+        usable[k] = false; // an all-NaN neighbour contributes nothing
+      }
+    }
+  }
+
+  std::vector<float>& offsets = workspace.offsets;
+  NormalField& normals = workspace.normals;
+  std::vector<std::vector<float>> inverse_d2(count), inverse_s2(count);
+  for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
+    const Grid& current = run.output;
+    StageTracker stage(observer, iteration);
+    std::vector<float> rho;
+    if (adaptive) {
+      stage.start(Stage::bandwidths);
+      rho = rangesOf(current);
+      estimateFrame(center, current, nullptr, medianRange(current, rho));
+    } else {
+      stage.start(Stage::normals);
+      detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, {}, 0, normals,
+                                   &workspace.normal_planes);
+      stage.start(Stage::bandwidths);
+      estimateFrame(center, current, &normals, 0.0f);
+    }
+    auto gateFor = [&](const std::vector<float>& sig) {
+      std::vector<float> gate;
+      if (parameters.normal_edge_gate > 0.0f) {
+        gate.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (std::size_t i = 0; i < n; ++i)
+          gate[i] = parameters.normal_edge_gate * sig[i] / parameters.similarity_scale;
+      }
+      return gate;
+    };
+    // Local noise sigma of every centre point: for the pre-smoothing and the displacement limit.
+    std::vector<float>& sigma = workspace.sigma;
+    stage.start(Stage::noise_maps);
+    sigma.resize(n);
+    if (!adaptive) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        sigma[i] = bandwidths[center].similarity;
+    } else {
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        sigma[i] = current.valid[i] ? parameters.similarity_scale * profiles[center].sigmaAt(rho[i]) : 0.0f;
+    }
+    if (parameters.normal_presmooth_window > 1) {
+      std::vector<float> range_sigma(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
+      const std::vector<float> gate = gateFor(sigma);
+      stage.start(Stage::presmoothing);
+      const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
+      stage.start(Stage::normals);
+      detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
+                                   normals, &workspace.normal_planes);
+    } else if (adaptive) {
+      const std::vector<float> gate = gateFor(sigma);
+      stage.start(Stage::normals);
+      detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
+                                   normals, &workspace.normal_planes);
+    }
+
+    stage.start(Stage::frame_terms);
+    float s_max = 0.0f;
+    for (int k = 0; k < count; ++k)
+      if (usable[k])
+        s_max = std::max(s_max, bandwidths[k].similarity);
+    std::vector<FrameTerm> terms;
+    std::vector<float> weights(count, 0.0f);
+    for (int k = 0; k < count; ++k) {
+      if (!usable[k])
+        continue;
+      weights[k] = temporalDistanceWeight(k, center) * temporalNoiseWeight(bandwidths[k].similarity, s_max);
+      FrameTerm term{k == center ? &current : frames[k], bandwidths[k].distance, bandwidths[k].similarity, weights[k]};
+      if (adaptive) {
+        // Per-point bandwidths from frame k's profile at the centre point's range; a bandwidth
+        // given by the user stays global.
+        if (!(parameters.distance_bandwidth > 0.0f)) {
+          inverse_d2[k].resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+          for (std::size_t i = 0; i < n; ++i)
+            inverse_d2[k][i] = detail::inverseSquare(parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i]);
+          term.inverse_distance2 = &inverse_d2[k];
+        }
+        if (!(parameters.similarity_bandwidth > 0.0f)) {
+          inverse_s2[k].resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+          for (std::size_t i = 0; i < n; ++i)
+            inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * profiles[k].sigmaAt(rho[i]));
+          term.inverse_similarity2 = &inverse_s2[k];
+        }
+      }
+      terms.push_back(term);
+    }
+    if (iteration == 0) {
+      run.bandwidths = bandwidths;
+      run.frame_weights = weights;
+    }
+    stage.start(Stage::offsets);
+    detail::computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
+                           parameters.evaluation, threads, active, offsets, &workspace.window_planes);
+    stage.start(Stage::displacement);
+    std::vector<float>& limit = workspace.limit;
+    if (parameters.max_displacement > 0.0f) {
+      limit.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        limit[i] = parameters.max_displacement * sigma[i];
+    } else {
+      limit.clear();
+    }
+    applyOffsets(run.output, normals, offsets, parameters.displacement, viewpoint, limit,
+                 parameters.line_of_sight_min_cos);
+  }
+}
+
+} // namespace range_nlm

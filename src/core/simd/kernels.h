@@ -1,0 +1,151 @@
+// The SIMD kernels of the filter (internal): the normal fits' moments and batched plane fits,
+// the range pre-smoothing and the windowed offset evaluation. They work on raw pointers only, so
+// the same sources (row_kernels.inc, window_kernel.inc, plane_fit_kernels.inc) are compiled once
+// per instruction set (kernels_baseline.cpp, kernels_avx2.cpp, kernels_avx512.cpp) and one table
+// (dispatch.cpp) chooses a build at run time; no inline function with external linkage is shared
+// between the builds, and no Eigen or PCL type crosses them.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace range_nlm
+{
+namespace detail
+{
+
+/// One row of a padded SoA frame: pointers to x, y, z and the validity flag (1/0).
+struct RowPointers
+{
+  const float* x;
+  const float* y;
+  const float* z;
+  const float* f;
+};
+
+/// Pixels of a row evaluated together by the windowed evaluation (one per vector lane).
+constexpr int kWindowLanes = 16;
+
+/// A frame of the windowed evaluation: x, y, z planes padded so that every window read of every
+/// row stays inside (NaN at invalid and outside pixels), pointing at pixel (0, 0); the frame
+/// weight; 1 / d^2 and 1 / s^2 of the row's pixels (WindowTask::lane_width values) or, when null,
+/// the scalars.
+struct WindowPlane
+{
+  const float* x = nullptr;
+  const float* y = nullptr;
+  const float* z = nullptr;
+  float psi = 1.0f;
+  const float* inv_d2 = nullptr;
+  const float* inv_s2 = nullptr;
+  float d2 = 0.0f, s2 = 0.0f;
+};
+
+/// Everything one row of the windowed evaluation reads. The per-pixel arrays hold the row's
+/// pixels, lane_width values (the width rounded up to kWindowLanes); pixels past the width and
+/// inactive pixels have active 0 and a zero normal.
+struct WindowTask
+{
+  int lane_width = 0;
+  int search = 0;
+  int patch = 0;
+  std::ptrdiff_t stride = 0; // row stride of the padded planes
+  WindowPlane center;        // the filtered frame (its patches)
+  const WindowPlane* frames = nullptr;
+  int frame_count = 0;
+  const float* nx = nullptr;
+  const float* ny = nullptr;
+  const float* nz = nullptr;
+  const float* active = nullptr;
+};
+
+struct RowKernels
+{
+  /// Moments of one neighbour offset for a row of centres (normal estimation): q = p_j - p_i,
+  /// w = flag_j if |rho_j - rho_i| * range_on <= gate and |q . n0| <= gate, then
+  /// acc[0..9] += w * (1, qx, qy, qz, qx qx, qx qy, qx qz, qy qy, qy qz, qz qz), each a row.
+  void (*moments)(RowPointers c, const float* c_rho, RowPointers q, const float* q_rho, const float* gate,
+                  const float* n0x, const float* n0y, const float* n0z, float range_on, int width, float* acc);
+  /// One neighbour offset of the range pre-smoothing: d = rho_j - rho_i,
+  /// w = flag_j exp(-d^2 inv[u]); num += w d; den += w.
+  void (*smoothing)(const float* c_rho, const float* q_rho, const float* q_flag, const float* inv, int width,
+                    float* num, float* den);
+  /// The windowed evaluation of row v: the filtered offsets h of its lane_width pixels (0 for
+  /// inactive ones) into `out`; `scratch` holds window_scratch() floats, aligned to 64 bytes.
+  void (*window_row)(const WindowTask& task, int v, float* scratch, float* out);
+  /// Floats of per-thread scratch window_row needs for a search window and patch size.
+  std::size_t (*window_scratch)(int search_window, int patch_size);
+};
+
+struct PlaneFitKernels
+{
+  /// For n symmetric 3x3 matrices given as six SoA rows of n doubles (entries 00, 01, 02, 11,
+  /// 12, 22: cov[k * n + i]), the unit eigenvector of the smallest eigenvalue into
+  /// out[0 * n + i], out[1 * n + i], out[2 * n + i] and the smallest eigenvalue (the Rayleigh
+  /// quotient of that vector) into out[3 * n + i].
+  /// The sign of the vector is arbitrary (but deterministic). All four are NaN when the trace is
+  /// not positive and finite, when the matrix has (numerically) rank <= 1 (collinear points: no
+  /// plane), or when no eigenvector can be formed.
+  void (*smallest_eigenvectors)(const double* cov, std::size_t n, double* out);
+  /// Normals of one row of neighbourhoods from their moments (normal estimation):
+  /// acc[k * width + u] for k = 0..9 holds (count, sx, sy, sz, sxx, sxy, sxz, syy, syz, szz) of
+  /// the neighbours relative to the centre point p = (px, py, pz)[u], flag[u] its validity (1/0).
+  /// The covariance (in double) is solved as above; the unit normal, turned toward the viewpoint
+  /// view[0..2], goes to nx, ny, nz as float. NaN where the point is invalid, where count < 2.5,
+  /// or where the solver gives no vector.
+  void (*normals)(const float* acc, const float* px, const float* py, const float* pz, const float* flag,
+                  const float* view, int width, float* nx, float* ny, float* nz);
+  /// Gated moments of a whole (2r+1) x (2r+1) window for a row of centres: the sums that
+  /// RowKernels::moments accumulates over the offsets (dv, du) = (-r, -r) ... (r, r), in that
+  /// order, into acc[k * width + u] (overwritten), but with the ten sums of a block of centres
+  /// kept in registers over all offsets. x, y, z, f, rho point to the row's first centre in a
+  /// padded SoA grid of row stride `stride` (border >= r on every side); gate, n0x, n0y, n0z and
+  /// range_on as for RowKernels::moments. A null gate means no gate (every valid neighbour
+  /// counts); rho, n0x, n0y, n0z and range_on are then not read.
+  void (*window_moments)(const float* x, const float* y, const float* z, const float* f, const float* rho,
+                         std::ptrdiff_t stride, int r, const float* gate, const float* n0x, const float* n0y,
+                         const float* n0z, float range_on, int width, float* acc);
+};
+
+/// One build of every kernel, for one instruction set.
+struct SimdKernels
+{
+  RowKernels rows;
+  PlaneFitKernels plane_fits;
+};
+
+/// Whether this CPU runs the AVX-512 (F, VL, DQ, BW) kernels; RANGE_NLM_NO_AVX512 in the
+/// environment turns them off (for comparisons).
+bool
+cpuRunsAvx512();
+/// Whether this CPU runs the AVX2 + FMA kernels.
+bool
+cpuRunsAvx2();
+
+/// The fastest kernels this CPU supports.
+const RowKernels&
+rowKernels();
+/// The baseline kernels (for tests).
+const RowKernels&
+baselineRowKernels();
+/// Every build of the kernels this CPU runs: baseline, then AVX2, then AVX-512 (for tests).
+std::vector<const RowKernels*>
+supportedRowKernels();
+
+/// The fastest plane-fit kernels this CPU supports.
+const PlaneFitKernels&
+planeFitKernels();
+/// The baseline kernels (for tests).
+const PlaneFitKernels&
+baselinePlaneFitKernels();
+
+/// The builds, each defined in its own translation unit (kernels_<isa>.cpp).
+const SimdKernels&
+baselineKernels();
+const SimdKernels&
+avx2Kernels();
+const SimdKernels&
+avx512Kernels();
+
+} // namespace detail
+} // namespace range_nlm

@@ -1,0 +1,460 @@
+// 16-bit depth PNGs <-> organized clouds, the intrinsics.txt reader and the libpng wrappers.
+#include <range_nlm/io/depth_image.h>
+
+#include <png.h>
+
+#include <cerrno>
+#include <cmath>
+#include <csetjmp>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace range_nlm
+{
+
+namespace
+{
+
+std::string
+quoted(const std::string& path)
+{
+  return "'" + path + "'";
+}
+
+std::string
+numberText(double value)
+{
+  std::ostringstream s;
+  s.precision(10);
+  s << value;
+  return s.str();
+}
+
+// ---- libpng plumbing ------------------------------------------------------------------------
+// libpng reports errors by longjmp. Every object with a destructor lives in the caller-owned
+// context (constructed before setjmp), so a jump skips no destructor; the caller turns the
+// recorded message into an exception after libpng has returned.
+
+struct PngContext
+{
+  char message[256] = {0};
+  std::FILE* file = nullptr;
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  detail::PngPixels pixels;
+  std::vector<png_bytep> rows;
+};
+
+void
+onPngError(png_structp png, png_const_charp message)
+{
+  auto* context = static_cast<PngContext*>(png_get_error_ptr(png));
+  std::snprintf(context->message, sizeof context->message, "%s", message);
+  png_longjmp(png, 1);
+}
+
+void
+onPngWarning(png_structp, png_const_charp)
+{
+  // Warnings (e.g. an unknown ancillary chunk) do not affect the pixels.
+}
+
+bool
+readPngPixels(PngContext& context)
+{
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &context, onPngError, onPngWarning);
+  if (png == nullptr) {
+    std::snprintf(context.message, sizeof context.message, "libpng cannot allocate a reader");
+    return false;
+  }
+  context.png = png;
+  context.info = png_create_info_struct(png);
+  if (context.info == nullptr) {
+    std::snprintf(context.message, sizeof context.message, "libpng cannot allocate image info");
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png)))
+    return false;
+  png_init_io(png, context.file);
+  png_read_info(png, context.info);
+  const int color_type = png_get_color_type(png, context.info);
+  const int bit_depth = png_get_bit_depth(png, context.info);
+  if (color_type == PNG_COLOR_TYPE_PALETTE)
+    png_set_palette_to_rgb(png);
+  if (bit_depth < 8)
+    png_set_expand(png);
+  png_set_interlace_handling(png);
+  png_read_update_info(png, context.info);
+  detail::PngPixels& pixels = context.pixels;
+  pixels.width = static_cast<int>(png_get_image_width(png, context.info));
+  pixels.height = static_cast<int>(png_get_image_height(png, context.info));
+  pixels.channels = png_get_channels(png, context.info);
+  pixels.bit_depth = png_get_bit_depth(png, context.info);
+  const std::size_t row_bytes = png_get_rowbytes(png, context.info);
+  if (row_bytes * static_cast<std::size_t>(pixels.height) > (std::size_t(1) << 31)) {
+    std::snprintf(context.message, sizeof context.message, "image of %d x %d pixels is too large", pixels.width,
+                  pixels.height);
+    return false;
+  }
+  pixels.bytes.resize(row_bytes * static_cast<std::size_t>(pixels.height));
+  context.rows.resize(static_cast<std::size_t>(pixels.height));
+  for (int v = 0; v < pixels.height; ++v)
+    context.rows[v] = pixels.bytes.data() + row_bytes * static_cast<std::size_t>(v);
+  png_read_image(png, context.rows.data());
+  png_read_end(png, nullptr);
+  return true;
+}
+
+bool
+writePngPixels(PngContext& context, const detail::PngPixels& pixels)
+{
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &context, onPngError, onPngWarning);
+  if (png == nullptr) {
+    std::snprintf(context.message, sizeof context.message, "libpng cannot allocate a writer");
+    return false;
+  }
+  context.png = png;
+  context.info = png_create_info_struct(png);
+  if (context.info == nullptr) {
+    std::snprintf(context.message, sizeof context.message, "libpng cannot allocate image info");
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png)))
+    return false;
+  png_init_io(png, context.file);
+  png_set_IHDR(png, context.info, static_cast<png_uint_32>(pixels.width), static_cast<png_uint_32>(pixels.height),
+               pixels.bit_depth, pixels.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, context.info);
+  png_write_image(png, context.rows.data());
+  png_write_end(png, nullptr);
+  return true;
+}
+
+void
+destroyReader(PngContext& context)
+{
+  if (context.png != nullptr)
+    png_destroy_read_struct(&context.png, context.info != nullptr ? &context.info : nullptr, nullptr);
+  if (context.file != nullptr)
+    std::fclose(context.file);
+  context.file = nullptr;
+}
+
+const char*
+colorTypeName(int channels)
+{
+  switch (channels) {
+  case 1:
+    return "greyscale";
+  case 2:
+    return "greyscale + alpha";
+  case 3:
+    return "RGB";
+  case 4:
+    return "RGBA";
+  default:
+    return "unknown colour type";
+  }
+}
+
+} // namespace
+
+void
+DepthIntrinsics::validate() const
+{
+  auto positive = [](const char* name, double value) {
+    if (!(std::isfinite(value) && value > 0.0))
+      throw std::invalid_argument(std::string("depth intrinsics: ") + name + " must be a positive number, got " +
+                                  numberText(value));
+  };
+  positive("fx", fx);
+  positive("fy", fy);
+  if (!std::isfinite(cx))
+    throw std::invalid_argument("depth intrinsics: cx must be finite, got " + numberText(cx));
+  if (!std::isfinite(cy))
+    throw std::invalid_argument("depth intrinsics: cy must be finite, got " + numberText(cy));
+  positive("depth_scale", depth_scale);
+}
+
+DepthIntrinsics
+readIntrinsics(const std::string& path, const DepthIntrinsics& defaults)
+{
+  std::ifstream in(path);
+  if (!in)
+    throw std::invalid_argument(quoted(path) + ": cannot open intrinsics file");
+  DepthIntrinsics result = defaults;
+  bool have_scale = false;
+  double format_scale = 0.0;
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::size_t hash = line.find('#');
+    if (hash != std::string::npos)
+      line.erase(hash);
+    std::istringstream fields(line);
+    std::string key;
+    if (!(fields >> key))
+      continue;
+    std::string value;
+    std::getline(fields, value);
+    const std::size_t first = value.find_first_not_of(" \t\r");
+    value = first == std::string::npos ? std::string() : value.substr(first);
+    while (!value.empty() && (value.back() == ' ' || value.back() == '\t' || value.back() == '\r'))
+      value.pop_back();
+    const std::string where = quoted(path) + " line " + std::to_string(line_number);
+    if (key == "depth_format") {
+      static const std::regex divided(R"(value\s*/\s*([0-9]+(\.[0-9]*)?))");
+      std::smatch match;
+      if (std::regex_search(value, match, divided))
+        format_scale = std::stod(match[1].str());
+      else if (value.find("millimetre") != std::string::npos || value.find("millimeter") != std::string::npos)
+        format_scale = 1000.0;
+      continue;
+    }
+    const bool numeric = key == "fx" || key == "fy" || key == "cx" || key == "cy" || key == "depth_scale" ||
+                         key == "width" || key == "height";
+    if (!numeric)
+      continue;
+    const char* begin = value.c_str();
+    char* end = nullptr;
+    errno = 0;
+    const double number = std::strtod(begin, &end);
+    if (value.empty() || end != begin + value.size() || errno == ERANGE || !std::isfinite(number))
+      throw std::invalid_argument(where + ": '" + key + "' needs a number, got '" + value + "'");
+    if (key == "fx")
+      result.fx = number;
+    else if (key == "fy")
+      result.fy = number;
+    else if (key == "cx")
+      result.cx = number;
+    else if (key == "cy")
+      result.cy = number;
+    else if (key == "depth_scale") {
+      result.depth_scale = number;
+      have_scale = true;
+    } else if (!(number >= 1.0 && number == std::floor(number)))
+      throw std::invalid_argument(where + ": '" + key + "' must be a positive integer, got '" + value + "'");
+  }
+  if (in.bad())
+    throw std::invalid_argument(quoted(path) + ": read error");
+  if (!have_scale && format_scale > 0.0)
+    result.depth_scale = format_scale;
+  try {
+    result.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(quoted(path) + ": " + e.what());
+  }
+  return result;
+}
+
+namespace detail
+{
+
+PngPixels
+readPng(const std::string& path)
+{
+  PngContext context;
+  context.file = std::fopen(path.c_str(), "rb");
+  if (context.file == nullptr)
+    throw std::invalid_argument(quoted(path) + ": cannot open PNG file: " + std::strerror(errno));
+  unsigned char signature[8] = {0};
+  const std::size_t got = std::fread(signature, 1, sizeof signature, context.file);
+  if (got != sizeof signature || png_sig_cmp(signature, 0, sizeof signature) != 0) {
+    std::fclose(context.file);
+    throw std::invalid_argument(quoted(path) + ": not a PNG file (bad signature)");
+  }
+  std::rewind(context.file);
+  bool ok = false;
+  try {
+    ok = readPngPixels(context);
+  } catch (...) {
+    destroyReader(context);
+    throw;
+  }
+  destroyReader(context);
+  if (!ok)
+    throw std::invalid_argument(quoted(path) + ": damaged PNG file: " + context.message);
+  return std::move(context.pixels);
+}
+
+void
+writePng(const std::string& path, const PngPixels& pixels)
+{
+  if (pixels.width <= 0 || pixels.height <= 0)
+    throw std::invalid_argument(quoted(path) + ": cannot write an empty image (" + std::to_string(pixels.width) +
+                                " x " + std::to_string(pixels.height) + ")");
+  if ((pixels.channels != 1 && pixels.channels != 3) || (pixels.bit_depth != 8 && pixels.bit_depth != 16))
+    throw std::invalid_argument(quoted(path) + ": unsupported PNG layout (" + std::to_string(pixels.channels) +
+                                " channels, " + std::to_string(pixels.bit_depth) + " bits)");
+  const std::size_t row_bytes =
+      static_cast<std::size_t>(pixels.width) * static_cast<std::size_t>(pixels.channels) * (pixels.bit_depth / 8);
+  if (pixels.bytes.size() != row_bytes * static_cast<std::size_t>(pixels.height))
+    throw std::invalid_argument(quoted(path) + ": pixel buffer holds " + std::to_string(pixels.bytes.size()) +
+                                " bytes, the image needs " + std::to_string(row_bytes * pixels.height));
+
+  const std::filesystem::path target(path);
+  const std::filesystem::path temporary =
+      target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  PngContext context;
+  context.rows.resize(static_cast<std::size_t>(pixels.height));
+  for (int v = 0; v < pixels.height; ++v)
+    context.rows[v] = const_cast<png_bytep>(pixels.bytes.data() + row_bytes * static_cast<std::size_t>(v));
+  context.file = std::fopen(temporary.string().c_str(), "wb");
+  if (context.file == nullptr)
+    throw std::invalid_argument(quoted(path) + ": cannot create PNG file: " + std::strerror(errno));
+  bool ok = false;
+  try {
+    ok = writePngPixels(context, pixels);
+  } catch (...) {
+    ok = false;
+    std::snprintf(context.message, sizeof context.message, "out of memory");
+  }
+  if (context.png != nullptr)
+    png_destroy_write_struct(&context.png, context.info != nullptr ? &context.info : nullptr);
+  const bool flushed = std::fflush(context.file) == 0;
+  const bool closed = std::fclose(context.file) == 0;
+  std::error_code ec;
+  if (!ok || !flushed || !closed) {
+    std::filesystem::remove(temporary, ec);
+    throw std::invalid_argument(quoted(path) + ": cannot write PNG file: " +
+                                (ok ? std::string(std::strerror(errno)) : std::string(context.message)));
+  }
+  std::filesystem::rename(temporary, target, ec);
+  if (ec) {
+    std::filesystem::remove(temporary, ec);
+    throw std::invalid_argument(quoted(path) + ": cannot move PNG file into place: " + ec.message());
+  }
+}
+
+} // namespace detail
+
+DepthImage
+readDepthPng(const std::string& path)
+{
+  detail::PngPixels pixels = detail::readPng(path);
+  if (pixels.channels != 1 || pixels.bit_depth != 16)
+    throw std::invalid_argument(quoted(path) + ": not a 16-bit greyscale depth PNG (found " +
+                                std::to_string(pixels.bit_depth) + "-bit " + colorTypeName(pixels.channels) + ")");
+  DepthImage image;
+  image.width = pixels.width;
+  image.height = pixels.height;
+  image.values.resize(static_cast<std::size_t>(pixels.width) * static_cast<std::size_t>(pixels.height));
+  for (std::size_t i = 0; i < image.values.size(); ++i)
+    image.values[i] = static_cast<std::uint16_t>((pixels.bytes[2 * i] << 8) | pixels.bytes[2 * i + 1]);
+  return image;
+}
+
+void
+writeDepthPng(const std::string& path, const DepthImage& image)
+{
+  if (image.values.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height))
+    throw std::invalid_argument(quoted(path) + ": depth image of " + std::to_string(image.width) + " x " +
+                                std::to_string(image.height) + " holds " + std::to_string(image.values.size()) +
+                                " values");
+  detail::PngPixels pixels;
+  pixels.width = image.width;
+  pixels.height = image.height;
+  pixels.channels = 1;
+  pixels.bit_depth = 16;
+  pixels.bytes.resize(2 * image.values.size());
+  for (std::size_t i = 0; i < image.values.size(); ++i) {
+    pixels.bytes[2 * i] = static_cast<std::uint8_t>(image.values[i] >> 8);
+    pixels.bytes[2 * i + 1] = static_cast<std::uint8_t>(image.values[i] & 0xff);
+  }
+  detail::writePng(path, pixels);
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics)
+{
+  intrinsics.validate();
+  if (image.width <= 0 || image.height <= 0 ||
+      image.values.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height))
+    throw std::invalid_argument("depth image: " + std::to_string(image.width) + " x " +
+                                std::to_string(image.height) + " with " + std::to_string(image.values.size()) +
+                                " values is empty or inconsistent");
+  pcl::PointCloud<pcl::PointXYZ> cloud(static_cast<std::uint32_t>(image.width),
+                                       static_cast<std::uint32_t>(image.height));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  bool dense = true;
+  for (int v = 0; v < image.height; ++v)
+    for (int u = 0; u < image.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * image.width + u;
+      pcl::PointXYZ& p = cloud[i];
+      const std::uint16_t value = image.values[i];
+      if (value == 0) {
+        p.x = p.y = p.z = nan;
+        dense = false;
+        continue;
+      }
+      const double z = value / intrinsics.depth_scale;
+      p.x = static_cast<float>((u - intrinsics.cx) * z / intrinsics.fx);
+      p.y = static_cast<float>((v - intrinsics.cy) * z / intrinsics.fy);
+      p.z = static_cast<float>(z);
+    }
+  cloud.is_dense = dense;
+  return cloud;
+}
+
+DepthImage
+cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale)
+{
+  if (!(std::isfinite(depth_scale) && depth_scale > 0.0))
+    throw std::invalid_argument("depth_scale must be a positive number, got " + numberText(depth_scale));
+  if (cloud.empty() || static_cast<std::size_t>(cloud.width) * cloud.height != cloud.size())
+    throw std::invalid_argument("cannot encode a " + std::to_string(cloud.width) + " x " +
+                                std::to_string(cloud.height) + " cloud of " + std::to_string(cloud.size()) +
+                                " points as a depth image (empty or not organized)");
+  DepthImage image;
+  image.width = static_cast<int>(cloud.width);
+  image.height = static_cast<int>(cloud.height);
+  image.values.assign(cloud.size(), 0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const pcl::PointXYZ& p = cloud[i];
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+      continue;
+    const double value = std::round(static_cast<double>(p.z) * depth_scale);
+    if (!(value >= 1.0 && value <= 65535.0))
+      throw std::invalid_argument(
+          "depth " + numberText(p.z) + " m at pixel (" + std::to_string(i % cloud.width) + ", " +
+          std::to_string(i / cloud.width) + ") does not fit a 16-bit depth image with depth_scale " +
+          numberText(depth_scale) + " (representable: " + numberText(0.5 / depth_scale) + " to " +
+          numberText(65535.0 / depth_scale) + " m); choose a smaller depth scale");
+    image.values[i] = static_cast<std::uint16_t>(value);
+  }
+  return image;
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics)
+{
+  const DepthImage image = readDepthPng(path);
+  try {
+    return depthImageToCloud(image, intrinsics);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(quoted(path) + ": " + e.what());
+  }
+}
+
+void
+saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale)
+{
+  DepthImage image;
+  try {
+    image = cloudToDepthImage(cloud, depth_scale);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(quoted(path) + ": " + e.what());
+  }
+  writeDepthPng(path, image);
+}
+
+} // namespace range_nlm

@@ -1,0 +1,615 @@
+#include <range_nlm/io/pcd_file.h>
+
+#include <pcl/common/io.h>
+#include <pcl/io/pcd_io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace range_nlm
+{
+namespace io
+{
+
+namespace
+{
+const pcl::PCLPointField*
+findField(const pcl::PCLPointCloud2& blob, const std::string& name)
+{
+  for (const auto& f : blob.fields)
+    if (f.name == name)
+      return &f;
+  return nullptr;
+}
+
+double
+readCoordinate(const std::uint8_t* p, const pcl::PCLPointField& f)
+{
+  if (f.datatype == pcl::PCLPointField::FLOAT64) {
+    double v;
+    std::memcpy(&v, p + f.offset, sizeof v);
+    return v;
+  }
+  float v;
+  std::memcpy(&v, p + f.offset, sizeof v);
+  return v;
+}
+
+void
+writeCoordinate(std::uint8_t* p, const pcl::PCLPointField& f, float value)
+{
+  if (f.datatype == pcl::PCLPointField::FLOAT64) {
+    const double v = value;
+    std::memcpy(p + f.offset, &v, sizeof v);
+  } else {
+    std::memcpy(p + f.offset, &value, sizeof value);
+  }
+}
+
+/// A PCD file's layout as announced by its header, checked before PCL's reader sees the file:
+/// PCDReader trusts the header (it allocates POINTS x point size up front, reads uninitialised
+/// values from malformed numbers, skips or zero-fills malformed ascii values and writes past its
+/// buffer when a binary_compressed body announces a wrong size), so every size is validated here.
+struct PcdLayout
+{
+  enum class Data
+  {
+    ascii,
+    binary,
+    binary_compressed
+  };
+  std::vector<pcl::PCLPointField> fields; // offsets packed in FIELDS order
+  std::vector<int> sizes;                 // bytes of one element of each field
+  std::vector<char> types;                // 'F', 'I', 'U' or 'B'
+  std::uint64_t point_step = 0;
+  std::uint64_t width = 0, height = 0, points = 0;
+  Data data = Data::ascii;
+  std::uint64_t data_offset = 0; // first byte of the body
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+};
+
+constexpr std::uint64_t kMaxPoints = std::uint64_t(1) << 28;
+constexpr std::uint64_t kMaxPointStep = std::uint64_t(1) << 20;
+constexpr std::size_t kMaxHeaderBytes = std::size_t(1) << 20;
+
+/// A token of the file as it may appear inside a one-line message: printable ASCII, shortened.
+std::string
+quote(const std::string& token)
+{
+  std::string out;
+  for (const char c : token.substr(0, 40))
+    out += (c >= 0x20 && c < 0x7f) ? c : '?';
+  if (token.size() > 40)
+    out += "...";
+  return "'" + out + "'";
+}
+
+[[noreturn]] void
+fail(const std::string& path, const std::string& problem)
+{
+  throw InputError("'" + path + "': " + problem);
+}
+
+std::vector<std::string>
+tokenize(const std::string& line)
+{
+  std::vector<std::string> tokens;
+  std::size_t start = 0;
+  while (true) {
+    start = line.find_first_not_of(" \t\r", start);
+    if (start == std::string::npos)
+      return tokens;
+    const std::size_t end = line.find_first_of(" \t\r", start);
+    tokens.push_back(line.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos)
+      return tokens;
+    start = end;
+  }
+}
+
+bool
+parseUnsigned(const std::string& token, std::uint64_t& value)
+{
+  if (token.empty() || token.size() > 19 || token.find_first_not_of("0123456789") != std::string::npos)
+    return false;
+  value = std::stoull(token);
+  return true;
+}
+
+/// A decimal number as PCL's reader converts it (no hex, no trailing characters), or nan/inf.
+bool
+isDecimalNumber(const std::string& token)
+{
+  std::size_t i = (!token.empty() && (token[0] == '+' || token[0] == '-')) ? 1 : 0;
+  std::string rest = token.substr(i);
+  std::transform(rest.begin(), rest.end(), rest.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (rest == "nan" || rest == "inf" || rest == "infinity")
+    return true;
+  std::size_t digits = 0;
+  i = 0;
+  while (i < rest.size() && std::isdigit(static_cast<unsigned char>(rest[i])))
+    ++i, ++digits;
+  if (i < rest.size() && rest[i] == '.') {
+    ++i;
+    while (i < rest.size() && std::isdigit(static_cast<unsigned char>(rest[i])))
+      ++i, ++digits;
+  }
+  if (digits == 0)
+    return false;
+  if (i < rest.size() && rest[i] == 'e') {
+    ++i;
+    if (i < rest.size() && (rest[i] == '+' || rest[i] == '-'))
+      ++i;
+    const std::size_t exponent_start = i;
+    while (i < rest.size() && std::isdigit(static_cast<unsigned char>(rest[i])))
+      ++i;
+    if (i == exponent_start)
+      return false;
+  }
+  return i == rest.size();
+}
+
+/// An ascii value of a field of `size` bytes and `type` 'F', 'I', 'U' or 'B'.
+bool
+isValidValue(const std::string& token, int size, char type)
+{
+  if (type == 'F')
+    return isDecimalNumber(token);
+  if (type == 'B')
+    return token == "0" || token == "1";
+  const bool negative = !token.empty() && token[0] == '-';
+  const std::string digits = token.substr((!token.empty() && (token[0] == '-' || token[0] == '+')) ? 1 : 0);
+  if (digits.empty() || digits.size() > 20 || digits.find_first_not_of("0123456789") != std::string::npos)
+    return false;
+  if (type == 'U' && negative)
+    return !digits.empty() && digits.find_first_not_of('0') == std::string::npos; // "-0"
+  errno = 0;
+  if (type == 'U') {
+    const unsigned long long v = std::strtoull(digits.c_str(), nullptr, 10);
+    return errno == 0 && (size == 8 || v < (1ull << (8 * size)));
+  }
+  const long long v = std::strtoll(token.c_str(), nullptr, 10);
+  if (errno != 0)
+    return false;
+  if (size == 8)
+    return true;
+  const long long limit = 1ll << (8 * size - 1);
+  return v >= -limit && v < limit;
+}
+
+PcdLayout
+readPcdLayout(const std::string& path, std::uint64_t file_size)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    fail(path, std::string("cannot open file: ") + std::strerror(errno));
+  std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMaxHeaderBytes)), '\0');
+  in.read(&head[0], static_cast<std::streamsize>(head.size()));
+  if (in.gcount() != static_cast<std::streamsize>(head.size()))
+    fail(path, "read error in the PCD header");
+
+  PcdLayout layout;
+  std::vector<std::uint64_t> counts;
+  bool have_width = false, have_height = false, have_points = false, have_size = false, have_type = false;
+  std::size_t pos = 0;
+  while (true) {
+    if (pos >= head.size())
+      fail(path, file_size > head.size() ? "malformed PCD header: no DATA line in the first MiB"
+                                         : "truncated PCD header (no DATA line)");
+    const std::size_t newline = head.find('\n', pos);
+    const bool last = newline == std::string::npos;
+    const std::string line = head.substr(pos, last ? std::string::npos : newline - pos);
+    pos = last ? head.size() : newline + 1;
+    if (last && file_size == head.size() && line.compare(0, 5, "DATA ") != 0)
+      fail(path, "truncated PCD header (it ends inside the line " + quote(line) + ")");
+    if (line.empty())
+      continue;
+    const std::vector<std::string> t = tokenize(line);
+    if (t.empty())
+      fail(path, "malformed PCD header: a line holds only blanks");
+    if (t[0][0] == '#')
+      continue;
+    const std::string& key = t[0];
+    const std::size_t n = t.size() - 1;
+    const std::string bad = "malformed PCD header: ";
+    auto need_fields = [&] {
+      if (layout.fields.empty())
+        fail(path, bad + key + " line before the FIELDS line");
+      if (n != layout.fields.size())
+        fail(path, bad + key + " has " + std::to_string(n) + " values for " +
+                       std::to_string(layout.fields.size()) + " fields");
+    };
+    auto number = [&](const std::string& token) {
+      std::uint64_t v = 0;
+      if (!parseUnsigned(token, v))
+        fail(path, bad + key + " value " + quote(token) + " is not a non-negative integer");
+      return v;
+    };
+    if (key == "VERSION") {
+      continue;
+    } else if (key == "FIELDS" || key == "COLUMNS") {
+      if (!layout.fields.empty())
+        fail(path, bad + "second FIELDS line");
+      if (n == 0)
+        fail(path, bad + "FIELDS line names no field");
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t j = 0; j < i; ++j)
+          if (t[i + 1] == t[j + 1] && t[i + 1] != "_")
+            fail(path, bad + "field " + quote(t[i + 1]) + " appears twice");
+        pcl::PCLPointField f;
+        f.name = t[i + 1];
+        layout.fields.push_back(f);
+      }
+      layout.sizes.assign(n, 4);
+      layout.types.assign(n, 'F');
+      counts.assign(n, 1);
+    } else if (key == "SIZE") {
+      need_fields();
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::uint64_t v = number(t[i + 1]);
+        if (v != 1 && v != 2 && v != 4 && v != 8)
+          fail(path, bad + "field " + quote(layout.fields[i].name) + " has SIZE " + std::to_string(v) +
+                         " (expected 1, 2, 4 or 8)");
+        layout.sizes[i] = int(v);
+      }
+      have_size = true;
+    } else if (key == "TYPE") {
+      need_fields();
+      for (std::size_t i = 0; i < n; ++i) {
+        if (t[i + 1].size() != 1 || !std::strchr("FIUB", t[i + 1][0]))
+          fail(path, bad + "field " + quote(layout.fields[i].name) + " has TYPE " + quote(t[i + 1]) +
+                         " (expected F, I, U or B)");
+        layout.types[i] = t[i + 1][0];
+      }
+      have_type = true;
+    } else if (key == "COUNT") {
+      need_fields();
+      for (std::size_t i = 0; i < n; ++i) {
+        counts[i] = number(t[i + 1]);
+        if (counts[i] < 1 || counts[i] > kMaxPointStep)
+          fail(path, bad + "field " + quote(layout.fields[i].name) + " has COUNT " + std::to_string(counts[i]));
+      }
+    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+      if (n != 1)
+        fail(path, bad + key + " needs one value, got " + std::to_string(n));
+      bool& seen = key == "WIDTH" ? have_width : key == "HEIGHT" ? have_height : have_points;
+      if (seen)
+        fail(path, bad + "second " + key + " line");
+      seen = true;
+      (key == "WIDTH" ? layout.width : key == "HEIGHT" ? layout.height : layout.points) = number(t[1]);
+    } else if (key == "VIEWPOINT") {
+      if (n != 7)
+        fail(path, bad + "VIEWPOINT needs 7 values (tx ty tz qw qx qy qz), got " + std::to_string(n));
+      float v[7];
+      for (std::size_t i = 0; i < 7; ++i) {
+        const std::string& token = t[i + 1];
+        v[i] = std::strtof(token.c_str(), nullptr);
+        if (!isDecimalNumber(token) || !std::isfinite(v[i]))
+          fail(path, bad + "VIEWPOINT value " + quote(token) + " is not a finite number");
+      }
+      layout.origin = Eigen::Vector4f(v[0], v[1], v[2], 0.0f);
+      layout.orientation = Eigen::Quaternionf(v[3], v[4], v[5], v[6]);
+    } else if (key == "DATA") {
+      if (n != 1 || (t[1] != "ascii" && t[1] != "binary" && t[1] != "binary_compressed"))
+        fail(path, bad + "DATA must be ascii, binary or binary_compressed, got " +
+                       quote(n ? t[1] : std::string()));
+      layout.data = t[1] == "ascii"    ? PcdLayout::Data::ascii
+                    : t[1] == "binary" ? PcdLayout::Data::binary
+                                       : PcdLayout::Data::binary_compressed;
+      if (last && layout.data != PcdLayout::Data::ascii)
+        fail(path, "truncated PCD header (DATA line not terminated)");
+      layout.data_offset = pos;
+      break;
+    } else {
+      fail(path, bad + "unexpected line " + quote(line));
+    }
+  }
+
+  if (layout.fields.empty())
+    fail(path, "malformed PCD header: no FIELDS line");
+  if (!have_size || !have_type)
+    fail(path, std::string("malformed PCD header: no ") + (have_size ? "TYPE" : "SIZE") + " line");
+  std::uint64_t offset = 0;
+  for (std::size_t i = 0; i < layout.fields.size(); ++i) {
+    pcl::PCLPointField& f = layout.fields[i];
+    const int datatype = pcl::getFieldType(layout.sizes[i], layout.types[i]);
+    if (datatype < 0)
+      fail(path, "malformed PCD header: field " + quote(f.name) + " has TYPE " + layout.types[i] + " with SIZE " +
+                     std::to_string(layout.sizes[i]));
+    f.datatype = static_cast<std::uint8_t>(datatype);
+    f.count = static_cast<std::uint32_t>(counts[i]);
+    f.offset = static_cast<std::uint32_t>(offset);
+    offset += counts[i] * layout.sizes[i];
+    if (offset > kMaxPointStep)
+      fail(path, "malformed PCD header: a point would take more than " + std::to_string(kMaxPointStep) + " bytes");
+  }
+  layout.point_step = offset;
+  if (!have_width && !have_height) {
+    layout.width = layout.points; // PCD v0.6: a list of POINTS points
+    layout.height = 1;
+  } else if (!have_height) {
+    layout.height = 1;
+  } else if (!have_width) {
+    fail(path, "malformed PCD header: HEIGHT without WIDTH");
+  }
+  if (layout.width == 0 || layout.height == 0)
+    fail(path, "cloud has zero width or height (" + std::to_string(layout.width) + " x " +
+                   std::to_string(layout.height) + ")");
+  if (layout.width > kMaxPoints || layout.height > kMaxPoints || layout.width * layout.height > kMaxPoints)
+    fail(path, "absurd size " + std::to_string(layout.width) + " x " + std::to_string(layout.height) +
+                   " (more than " + std::to_string(kMaxPoints) + " points)");
+  if (!have_points)
+    layout.points = layout.width * layout.height;
+  if (layout.points != layout.width * layout.height)
+    fail(path, "malformed PCD header: POINTS " + std::to_string(layout.points) + " but WIDTH x HEIGHT = " +
+                   std::to_string(layout.width * layout.height));
+  return layout;
+}
+
+std::uint32_t
+readLittleEndian32(const unsigned char* p)
+{
+  return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
+}
+
+/// Checks that a binary or binary_compressed body (`file` holds the whole file) holds exactly the
+/// points the header announces. (PCL's writer may leave bytes after the data: they are ignored.)
+void
+checkBinaryBody(const std::string& path, const PcdLayout& layout, const std::vector<unsigned char>& file)
+{
+  const std::uint64_t body = file.size() - layout.data_offset;
+  const std::uint64_t bytes = layout.points * layout.point_step;
+  if (layout.data == PcdLayout::Data::binary) {
+    if (body < bytes)
+      fail(path, "truncated PCD body (binary: " + std::to_string(body) + " of " + std::to_string(bytes) +
+                     " bytes for " + std::to_string(layout.points) + " points)");
+    return;
+  }
+  if (body < 8)
+    fail(path, "truncated PCD body (binary_compressed: no size record)");
+  for (const pcl::PCLPointField& f : layout.fields)
+    if (f.name == "_")
+      fail(path, "malformed PCD header: padding field '_' in a binary_compressed file");
+  const unsigned char* sizes = file.data() + layout.data_offset;
+  const std::uint64_t compressed = readLittleEndian32(sizes), uncompressed = readLittleEndian32(sizes + 4);
+  if (uncompressed != bytes)
+    fail(path, "malformed PCD body (binary_compressed: announces " + std::to_string(uncompressed) +
+                   " bytes, WIDTH x HEIGHT points need " + std::to_string(bytes) + ")");
+  if (compressed == 0 || 8 + compressed > body)
+    fail(path, "truncated PCD body (binary_compressed: " + std::to_string(body - 8) + " of " +
+                   std::to_string(compressed) + " compressed bytes)");
+  // LZF expands a 3-byte back reference to at most 264 bytes.
+  if (uncompressed > 88 * compressed + 32)
+    fail(path, "malformed PCD body (binary_compressed: " + std::to_string(compressed) +
+                   " compressed bytes cannot hold " + std::to_string(uncompressed) + ")");
+}
+
+/// Checks that an ascii body holds exactly the points the header announces, each with one valid
+/// value per element (PCL skips empty lines and counts every other line as a point).
+void
+checkAsciiBody(const std::string& path, const PcdLayout& layout)
+{
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(layout.data_offset));
+  std::uint64_t elements = 0;
+  for (const pcl::PCLPointField& f : layout.fields)
+    elements += f.count;
+  std::uint64_t point = 0;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty())
+      continue;
+    const std::vector<std::string> t = tokenize(line);
+    if (point == layout.points) {
+      if (t.empty())
+        continue;
+      fail(path, "malformed PCD body (ascii: more than the " + std::to_string(layout.points) +
+                     " points of the header)");
+    }
+    ++point;
+    if (t.size() != elements && in.eof())
+      fail(path, "truncated PCD body (ascii: point " + std::to_string(point) + " of " +
+                     std::to_string(layout.points) + " is cut off)");
+    if (t.size() != elements)
+      fail(path, "malformed PCD body (ascii: point " + std::to_string(point) + " has " +
+                     std::to_string(t.size()) + " values, expected " + std::to_string(elements) + ")");
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < layout.fields.size(); ++i)
+      for (std::uint32_t c = 0; c < layout.fields[i].count; ++c, ++k)
+        if (layout.fields[i].name != "_" && !isValidValue(t[k], layout.sizes[i], layout.types[i]))
+          fail(path, "malformed PCD body (ascii: point " + std::to_string(point) + ", field " +
+                         quote(layout.fields[i].name) + ": " + quote(t[k]) + " is not a valid " +
+                         (layout.types[i] == 'F' ? "number" : "integer of its TYPE and SIZE") + ")");
+  }
+  if (point < layout.points)
+    fail(path, "truncated PCD body (ascii: " + std::to_string(point) + " of " + std::to_string(layout.points) +
+                   " points)");
+}
+} // namespace
+
+LoadedCloud
+loadCloud(const std::string& path, bool organized)
+{
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    fail(path, "file does not exist");
+  if (!fs::is_regular_file(path, ec))
+    fail(path, "not a regular file");
+  const std::uint64_t file_size = fs::file_size(path, ec);
+  if (ec)
+    fail(path, "cannot read the file size: " + ec.message());
+  if (file_size == 0)
+    fail(path, "file is empty");
+  const PcdLayout layout = readPcdLayout(path, file_size);
+  for (const char* axis : {"x", "y", "z"}) {
+    const auto f = std::find_if(layout.fields.begin(), layout.fields.end(),
+                                [&](const pcl::PCLPointField& field) { return field.name == axis; });
+    if (f == layout.fields.end())
+      fail(path, std::string("PCD has no '") + axis + "' field");
+    if ((f->datatype != pcl::PCLPointField::FLOAT32 && f->datatype != pcl::PCLPointField::FLOAT64) ||
+        f->count != 1)
+      fail(path, std::string("field '") + axis + "' is not a single float");
+  }
+  if (organized && layout.height < 2)
+    fail(path, "cloud is not organized (height " + std::to_string(layout.height) +
+                   "); range_nlm needs a grid such as a depth-camera frame");
+
+  // The body is decoded by PCL from the validated layout; PCL never parses the header itself.
+  LoadedCloud loaded;
+  loaded.origin = layout.origin;
+  loaded.orientation = layout.orientation;
+  pcl::PCLPointCloud2& blob = loaded.blob;
+  blob.fields = layout.fields;
+  blob.width = static_cast<std::uint32_t>(layout.width);
+  blob.height = static_cast<std::uint32_t>(layout.height);
+  blob.point_step = static_cast<std::uint32_t>(layout.point_step);
+  blob.row_step = static_cast<std::uint32_t>(layout.point_step * layout.width);
+  blob.is_bigendian = false;
+  pcl::PCDReader reader;
+  if (layout.data == PcdLayout::Data::ascii) {
+    checkAsciiBody(path, layout);
+    blob.data.resize(layout.points * layout.point_step);
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(layout.data_offset));
+    if (!in || reader.readBodyASCII(in, blob, pcl::PCDReader::PCD_V7) < 0)
+      fail(path, "cannot read the ascii PCD body");
+  } else {
+    std::vector<unsigned char> file(static_cast<std::size_t>(file_size));
+    std::ifstream in(path, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(file.data()), static_cast<std::streamsize>(file.size())))
+      fail(path, "read error in the PCD body");
+    checkBinaryBody(path, layout, file);
+    blob.data.resize(layout.points * layout.point_step);
+    const bool compressed = layout.data == PcdLayout::Data::binary_compressed;
+    if (reader.readBodyBinary(file.data(), blob, pcl::PCDReader::PCD_V7, compressed,
+                              static_cast<unsigned int>(layout.data_offset)) < 0)
+      fail(path, compressed ? "corrupt binary_compressed PCD body (the LZF data does not decompress to "
+                              "WIDTH x HEIGHT points)"
+                            : "cannot read the binary PCD body");
+  }
+  if (blob.data.size() != layout.points * layout.point_step)
+    fail(path, "PCD body does not hold width x height points");
+  return loaded;
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+xyzFromBlob(const LoadedCloud& loaded, const std::string& path)
+{
+  const pcl::PCLPointCloud2& blob = loaded.blob;
+  const pcl::PCLPointField* fx = findField(blob, "x");
+  const pcl::PCLPointField* fy = findField(blob, "y");
+  const pcl::PCLPointField* fz = findField(blob, "z");
+  if (!fx || !fy || !fz)
+    throw InputError("'" + path + "': PCD has no x, y, z fields");
+  pcl::PointCloud<pcl::PointXYZ> cloud(blob.width, blob.height);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  bool dense = true;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const std::uint8_t* p = &blob.data[i * blob.point_step];
+    const double x = readCoordinate(p, *fx), y = readCoordinate(p, *fy), z = readCoordinate(p, *fz);
+    if (std::isinf(x) || std::isinf(y) || std::isinf(z))
+      throw InputError("'" + path + "': infinite coordinate at pixel (" + std::to_string(i % blob.width) +
+                       ", " + std::to_string(i / blob.width) + "); invalid points must be NaN");
+    const double largest = std::numeric_limits<float>::max();
+    if (std::fabs(x) > largest || std::fabs(y) > largest || std::fabs(z) > largest)
+      throw InputError("'" + path + "': coordinate outside the float range at pixel (" +
+                       std::to_string(i % blob.width) + ", " + std::to_string(i / blob.width) + ")");
+    pcl::PointXYZ& q = cloud[i];
+    if (std::isnan(x) || std::isnan(y) || std::isnan(z)) {
+      q.x = q.y = q.z = nan;
+      dense = false;
+    } else {
+      q.x = float(x), q.y = float(y), q.z = float(z);
+    }
+  }
+  cloud.is_dense = dense;
+  cloud.sensor_origin_ = loaded.origin;
+  cloud.sensor_orientation_ = loaded.orientation;
+  return cloud;
+}
+
+void
+writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& blob)
+{
+  const pcl::PCLPointField* fx = findField(blob, "x");
+  const pcl::PCLPointField* fy = findField(blob, "y");
+  const pcl::PCLPointField* fz = findField(blob, "z");
+  bool dense = true;
+  for (std::size_t i = 0; i < xyz.size(); ++i) {
+    std::uint8_t* p = &blob.data[i * blob.point_step];
+    writeCoordinate(p, *fx, xyz[i].x);
+    writeCoordinate(p, *fy, xyz[i].y);
+    writeCoordinate(p, *fz, xyz[i].z);
+    dense = dense && std::isfinite(xyz[i].x) && std::isfinite(xyz[i].y) && std::isfinite(xyz[i].z);
+  }
+  blob.is_dense = dense;
+}
+
+void
+saveCloudAtomic(const std::string& path, const pcl::PCLPointCloud2& blob, const Eigen::Vector4f& origin,
+                const Eigen::Quaternionf& orientation)
+{
+  const fs::path target(path);
+  const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" +
+                                               std::to_string(::getpid()));
+  pcl::PCDWriter writer;
+  int rc = -1;
+  try {
+    rc = writer.writeBinary(tmp.string(), blob, origin, orientation);
+  } catch (const std::exception&) {
+    rc = -1;
+  }
+  std::error_code ec;
+  if (rc != 0) {
+    fs::remove(tmp, ec);
+    throw InputError("'" + path + "': cannot write output file");
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw InputError("'" + path + "': cannot move output into place: " + ec.message());
+  }
+}
+
+bool
+isDepthImagePath(const std::string& path)
+{
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".png";
+}
+
+LoadedCloud
+loadFrame(const std::string& path, const DepthIntrinsics& intrinsics)
+{
+  if (!isDepthImagePath(path))
+    return loadCloud(path);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  try {
+    cloud = loadDepthPng(path, intrinsics);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+  if (cloud.height < 2)
+    throw InputError("'" + path + "': depth image has a single row; range_nlm needs a grid");
+  LoadedCloud loaded;
+  pcl::toPCLPointCloud2(cloud, loaded.blob);
+  return loaded;
+}
+
+} // namespace io
+} // namespace range_nlm

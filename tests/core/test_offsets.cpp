@@ -1,0 +1,259 @@
+// The fast (windowed) kernel against the direct one, and the small math helpers.
+#include "test_support.h"
+
+#include "core/internal.h"
+#include "core/simd/kernels.h"
+
+#include <range_nlm/core/pipeline.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+using namespace range_nlm;
+
+namespace
+{
+Grid
+randomSurface(int w, int h, double hole_probability, std::uint64_t seed)
+{
+  auto cloud = test::makeCloud(w, h, [](double a, double b, int u, int) { return 1.0 + 0.2 * a + (u > 10 ? 0.15 : 0.0) + 0.1 * b * b; },
+                               0.004, seed);
+  test::punchHoles(cloud, hole_probability, seed + 1);
+  return Grid::fromInterleaved(&cloud[0].x, w, h, sizeof(pcl::PointXYZ) / sizeof(float));
+}
+
+double
+maxDifference(const std::vector<float>& a, const std::vector<float>& b)
+{
+  double m = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    m = std::max(m, double(std::fabs(a[i] - b[i])));
+  return m;
+}
+} // namespace
+
+TEST(Kernel, ExpMatchesStdExp)
+{
+  for (float x = -90.0f; x <= 0.0f; x += 0.01f) {
+    const float expected = std::exp(x);
+    const float got = detail::expNonPositive(x);
+    if (x < -87.0f)
+      EXPECT_EQ(got, 0.0f);
+    else
+      EXPECT_NEAR(got, expected, 4e-7f * expected + 1e-38f) << x;
+  }
+  EXPECT_EQ(detail::expNonPositive(-std::numeric_limits<float>::infinity()), 0.0f);
+}
+
+TEST(Kernel, FastMatchesDirectOnHolesBordersAndWindowSizes)
+{
+  const Viewpoint origin{0, 0, 0};
+  for (int holes = 0; holes < 2; ++holes) {
+    const Grid grid = randomSurface(23, 17, holes ? 0.15 : 0.0, 7 + holes);
+    const NormalField normals = estimateNormals(grid, 3, origin, 1);
+    for (int search : {1, 3, 5, 7, 9})
+      for (int patch : {1, 3, 5, 7, 11}) {
+        const std::vector<FrameTerm> terms{{&grid, 0.02f, 0.004f, 1.0f}};
+        std::vector<float> fast, direct;
+        computeOffsets(grid, normals, terms, search, patch, Evaluation::fast, 2, {}, fast);
+        computeOffsets(grid, normals, terms, search, patch, Evaluation::direct, 2, {}, direct);
+        EXPECT_LT(maxDifference(fast, direct), 2e-6) << "search " << search << " patch " << patch;
+      }
+  }
+}
+
+TEST(Kernel, FastMatchesDirectWithSeveralFrames)
+{
+  const Viewpoint origin{0, 0, 0};
+  const Grid a = randomSurface(31, 19, 0.1, 1), b = randomSurface(31, 19, 0.1, 2), c = randomSurface(31, 19, 0.1, 3);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  const std::vector<FrameTerm> terms{{&a, 0.03f, 0.005f, 0.3f}, {&b, 0.02f, 0.004f, 1.0f}, {&c, 0.025f, 0.006f, 0.2f}};
+  std::vector<float> fast, direct;
+  computeOffsets(b, normals, terms, 7, 5, Evaluation::fast, 2, {}, fast);
+  computeOffsets(b, normals, terms, 7, 5, Evaluation::direct, 2, {}, direct);
+  EXPECT_LT(maxDifference(fast, direct), 2e-6);
+}
+
+TEST(Kernel, FastMatchesDirectOnAWideFrameWithPerPointBandwidths)
+{
+  // A wide frame whose width is no multiple of the vector width, with holes, per-point bandwidth
+  // maps and three frames: rows of vectors with and without holes, their last partial vector,
+  // and the per-pixel maps must give the literal formula.
+  const Viewpoint origin{0, 0, 0};
+  const int w = 300, h = 75;
+  const Grid a = randomSurface(w, h, 0.1, 11), b = randomSurface(w, h, 0.1, 12), c = randomSurface(w, h, 0.1, 13);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  std::vector<float> inv_d2(b.size()), inv_s2(b.size());
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    inv_d2[i] = 1.0f / std::pow(0.015f + 0.00002f * float(i % 997), 2.0f);
+    inv_s2[i] = 1.0f / std::pow(0.003f + 0.000003f * float(i % 661), 2.0f);
+  }
+  FrameTerm centre{&b, 0.0f, 0.0f, 1.0f};
+  centre.inverse_distance2 = &inv_d2;
+  centre.inverse_similarity2 = &inv_s2;
+  const std::vector<FrameTerm> terms{{&a, 0.03f, 0.005f, 0.3f}, centre, {&c, 0.025f, 0.006f, 0.2f}};
+  std::vector<float> fast, direct;
+  computeOffsets(b, normals, terms, 9, 5, Evaluation::fast, 2, {}, fast);
+  computeOffsets(b, normals, terms, 9, 5, Evaluation::direct, 2, {}, direct);
+  EXPECT_LT(maxDifference(fast, direct), 2e-6);
+  std::size_t moved = 0;
+  for (float o : fast)
+    moved += o != 0.0f;
+  EXPECT_GT(moved, b.size() / 2);
+  computeOffsets(b, normals, {centre}, 5, 11, Evaluation::fast, 3, {}, fast);
+  computeOffsets(b, normals, {centre}, 5, 11, Evaluation::direct, 3, {}, direct);
+  EXPECT_LT(maxDifference(fast, direct), 2e-6);
+}
+
+TEST(Kernel, EveryInstructionSetBuildMatchesDirect)
+{
+  // The baseline, AVX2 and AVX-512 builds this CPU runs (computeOffsets takes only the fastest),
+  // on widths around the vector widths, with and without holes, three frames, the compile-time
+  // patch sizes and a run-time one (13), remainders of the blocks of four shifts (search 1 .. 9),
+  // and the correlation sums (patches of 7 and more without holes).
+  const Viewpoint origin{0, 0, 0};
+  const std::vector<const detail::RowKernels*> builds = detail::supportedRowKernels();
+  ASSERT_GE(builds.size(), 1u);
+  for (int holes = 0; holes < 2; ++holes)
+    for (int w : {7, 17, 33}) {
+      const Grid a = randomSurface(w, 21, holes ? 0.12 : 0.0, 40 + w);
+      const Grid b = randomSurface(w, 21, holes ? 0.12 : 0.0, 41 + w);
+      const NormalField normals = estimateNormals(b, 3, origin, 1);
+      const std::vector<FrameTerm> terms{{&a, 0.03f, 0.005f, 0.4f}, {&b, 0.02f, 0.004f, 1.0f}};
+      for (int search : {1, 3, 5, 7, 9})
+        for (int patch : {1, 3, 5, 7, 9, 11, 13}) {
+          std::vector<float> direct;
+          computeOffsets(b, normals, terms, search, patch, Evaluation::direct, 2, {}, direct);
+          for (std::size_t k = 0; k < builds.size(); ++k) {
+            std::vector<float> fast(b.size(), -1.0f);
+            detail::computeOffsetsWindowed(*builds[k], b, normals, terms, search, patch, 2, {}, fast);
+            EXPECT_LT(maxDifference(fast, direct), 2e-6)
+                << "build " << k << " width " << w << " holes " << holes << " search " << search << " patch " << patch;
+          }
+        }
+    }
+}
+
+TEST(Kernel, FastKeepsPrecisionWherePatchesStraddleADepthEdge)
+{
+  // A 0.5 m step with 0.2 mm noise: patches that straddle the step at the same place have a
+  // small Sim but sums of squared heights ten thousand times larger, where A - 2C + B cancels in
+  // float. The fast path must still match the literal formula (it sums those pairs again).
+  const Viewpoint origin{0, 0, 0};
+  auto cloud = test::makeCloud(40, 24, [](double a, double, int u, int) { return 1.0 + 0.05 * a + (u >= 20 ? 0.5 : 0.0); },
+                               0.0002, 5);
+  const Grid grid = Grid::fromInterleaved(&cloud[0].x, 40, 24, sizeof(pcl::PointXYZ) / sizeof(float));
+  const NormalField normals = estimateNormals(grid, 3, origin, 1);
+  const std::vector<FrameTerm> terms{{&grid, 0.05f, 0.0004f, 1.0f}};
+  for (int patch : {7, 9, 11}) {
+    std::vector<float> fast, direct;
+    computeOffsets(grid, normals, terms, 7, patch, Evaluation::fast, 2, {}, fast);
+    computeOffsets(grid, normals, terms, 7, patch, Evaluation::direct, 2, {}, direct);
+    EXPECT_LT(maxDifference(fast, direct), 2e-7) << "patch " << patch;
+  }
+}
+
+TEST(Kernel, ActiveMaskLimitsComputation)
+{
+  const Viewpoint origin{0, 0, 0};
+  const Grid grid = randomSurface(20, 20, 0.0, 3);
+  const NormalField normals = estimateNormals(grid, 3, origin, 1);
+  std::vector<unsigned char> active(grid.size(), 0);
+  active[5 * 20 + 5] = 1;
+  std::vector<float> offsets;
+  computeOffsets(grid, normals, {{&grid, 0.02f, 0.004f, 1.0f}}, 5, 3, Evaluation::fast, 1, active, offsets);
+  for (std::size_t i = 0; i < offsets.size(); ++i)
+    if (i != 5 * 20 + 5)
+      EXPECT_EQ(offsets[i], 0.0f);
+  EXPECT_NE(offsets[5 * 20 + 5], 0.0f);
+}
+
+TEST(Kernel, NormalsFaceTheViewpointAndFitPlanes)
+{
+  const Eigen::Vector3d n(0.3, -0.2, 1.0);
+  auto cloud = test::makeCloud(15, 12, test::plane(n, 1.2), 0.0, 1);
+  const Grid grid = Grid::fromInterleaved(&cloud[0].x, 15, 12, 4);
+  const NormalField normals = estimateNormals(grid, 3, Viewpoint{0, 0, 0}, 1);
+  const Eigen::Vector3d unit = -n.normalized(); // toward the camera at the origin
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    EXPECT_NEAR(normals.nx[i], unit.x(), 1e-4);
+    EXPECT_NEAR(normals.ny[i], unit.y(), 1e-4);
+    EXPECT_NEAR(normals.nz[i], unit.z(), 1e-4);
+  }
+}
+
+TEST(Kernel, TemporalWeights)
+{
+  EXPECT_FLOAT_EQ(temporalDistanceWeight(3, 3), 1.0f);
+  EXPECT_FLOAT_EQ(temporalDistanceWeight(2, 3), 0.5f);
+  EXPECT_FLOAT_EQ(temporalDistanceWeight(5, 3), 0.25f);
+  EXPECT_FLOAT_EQ(temporalNoiseWeight(2.0f, 2.0f), std::exp(-1.0f));
+  EXPECT_FLOAT_EQ(temporalNoiseWeight(1.0f, 2.0f), std::exp(-0.25f));
+  EXPECT_FLOAT_EQ(temporalNoiseWeight(0.0f, 0.0f), std::exp(-1.0f));
+}
+
+TEST(Kernel, BandwidthSamplesAreTheDocumentedCandidates)
+{
+  // Sample m is the m-th valid point with a finite normal in index order, m = rng() % candidates
+  // with std::mt19937_64(seed); the bandwidths are the means of the sampled windows' largest
+  // distance and height spread. Holes, and valid points without a normal, make the candidates
+  // of a 256-point block (and of its 32-point chunks) uneven, so a wrong count shows.
+  const Grid grid = randomSurface(90, 70, 0.2, 21);
+  NormalField normals = estimateNormals(grid, 3, Viewpoint{0, 0, 0}, 1);
+  for (std::size_t i = 0; i < grid.size(); i += 7)
+    normals.nx[i] = std::numeric_limits<float>::quiet_NaN();
+  const int samples = 300, r = 2;
+  const std::uint64_t seed = 5;
+  std::vector<int> candidates;
+  for (std::size_t i = 0; i < grid.size(); ++i)
+    if (grid.valid[i] && std::isfinite(normals.nx[i]))
+      candidates.push_back(static_cast<int>(i));
+  std::mt19937_64 rng(seed);
+  std::vector<int> picks(samples);
+  for (int& k : picks)
+    k = candidates[rng() % candidates.size()];
+  std::sort(picks.begin(), picks.end());
+  double sum_extent = 0.0, sum_spread = 0.0;
+  for (const int k : picks) {
+    const int u = k % grid.width, v = k / grid.width;
+    double max_dist2 = 0.0, sum_h = 0.0, sum_h2 = 0.0;
+    int valid = 0;
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        const int j = jv * grid.width + ju;
+        if (!grid.valid[j])
+          continue;
+        const double dx = double(grid.x[j]) - grid.x[k], dy = double(grid.y[j]) - grid.y[k];
+        const double dz = double(grid.z[j]) - grid.z[k];
+        max_dist2 = std::max(max_dist2, dx * dx + dy * dy + dz * dz);
+        const double h = dx * normals.nx[k] + dy * normals.ny[k] + dz * normals.nz[k];
+        sum_h += h, sum_h2 += h * h, ++valid;
+      }
+    const double mean = sum_h / valid;
+    sum_extent += std::sqrt(max_dist2);
+    sum_spread += std::sqrt(std::max(0.0, sum_h2 / valid - mean * mean));
+  }
+  const Bandwidths b = estimateBandwidths(grid, normals, 2 * r + 1, samples, seed);
+  EXPECT_FLOAT_EQ(b.mu_d, static_cast<float>(sum_extent / samples));
+  EXPECT_FLOAT_EQ(b.sigma_s, static_cast<float>(sum_spread / samples));
+}
+
+TEST(Kernel, BandwidthsAreDeterministicPerSeed)
+{
+  const Grid grid = randomSurface(40, 30, 0.05, 9);
+  const NormalField normals = estimateNormals(grid, 3, Viewpoint{0, 0, 0}, 1);
+  const Bandwidths a = estimateBandwidths(grid, normals, 7, 200, 1);
+  const Bandwidths b = estimateBandwidths(grid, normals, 7, 200, 1);
+  const Bandwidths c = estimateBandwidths(grid, normals, 7, 200, 2);
+  EXPECT_EQ(a.mu_d, b.mu_d);
+  EXPECT_EQ(a.sigma_s, b.sigma_s);
+  EXPECT_NE(a.mu_d, c.mu_d);
+  // noise 4 mm along the ray: the tangent-plane offsets (to noisy one-ring planes) spread by
+  // about that much, inflated by the normal error
+  EXPECT_GT(a.sigma_s, 0.003f);
+  EXPECT_LT(a.sigma_s, 0.012f);
+}

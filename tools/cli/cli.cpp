@@ -1,0 +1,284 @@
+#include "cli/cli.h"
+
+#include <pcl/common/io.h>
+#include <pcl/console/print.h>
+#include <pcl/io/pcd_io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+namespace po = boost::program_options;
+
+namespace range_nlm
+{
+namespace tools
+{
+
+int
+runTool(const std::string& tool, const std::function<int()>& body)
+{
+  // PCL's own console messages would add lines to our one-line errors.
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::cerr << tool << ": usage error: " << e.what() << " (see " << tool << " --help)\n";
+    return 2;
+  } catch (const po::error& e) {
+    std::cerr << tool << ": usage error: " << e.what() << " (see " << tool << " --help)\n";
+    return 2;
+  } catch (const std::invalid_argument& e) {
+    std::cerr << tool << ": error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+bool
+parseCommandLine(int argc, char** argv, const po::options_description& options,
+                 const po::positional_options_description& positional, po::variables_map& vm,
+                 const std::string& usage)
+{
+  po::store(po::command_line_parser(argc, argv).options(options).positional(positional).run(), vm);
+  if (vm.count("help")) {
+    std::cout << usage << "\n\n" << options << "\n";
+    return false;
+  }
+  po::notify(vm);
+  return true;
+}
+
+void
+addFilterOptions(po::options_description& options)
+{
+  const FilterParameters d = FilterParameters::recommended();
+  // clang-format off
+  options.add_options()
+    ("preset", po::value<std::string>()->default_value("default"),
+     "parameter preset: 'default' (recommended) or 'paper' (the literal method); options below override it")
+    ("search-window", po::value<int>(), ("S, odd side of the search window in pixels [preset: " + std::to_string(d.search_window) + "]").c_str())
+    ("patch", po::value<int>(), ("P, odd side of the similarity patch in pixels [preset: " + std::to_string(d.patch_size) + "]").c_str())
+    ("iterations", po::value<int>(), ("filter passes [preset: " + std::to_string(d.iterations) + "]").c_str())
+    ("threads", po::value<int>()->default_value(0), "OpenMP threads, 0 = all cores (output does not depend on it)")
+    ("distance-bandwidth", po::value<float>(), "d in cloud units [default: automatic]")
+    ("similarity-bandwidth", po::value<float>(), "s in cloud units [default: automatic]")
+    ("seed", po::value<std::uint64_t>()->default_value(42), "seed of the bandwidth sample")
+    ("normal-window", po::value<int>(), ("odd side of the normal-estimation neighbourhood [preset: " + std::to_string(d.normal_window) + "]").c_str())
+    ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
+    ("line-of-sight", "move points along their camera ray instead of the normal (depth sensors)");
+  // clang-format on
+}
+
+FilterParameters
+filterParametersFrom(const po::variables_map& vm)
+{
+  FilterParameters p;
+  try {
+    p = FilterParameters::preset(vm["preset"].as<std::string>());
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  if (vm.count("search-window"))
+    p.search_window = vm["search-window"].as<int>();
+  if (vm.count("patch"))
+    p.patch_size = vm["patch"].as<int>();
+  if (vm.count("iterations"))
+    p.iterations = vm["iterations"].as<int>();
+  p.threads = vm["threads"].as<int>();
+  if (vm.count("distance-bandwidth"))
+    p.distance_bandwidth = vm["distance-bandwidth"].as<float>();
+  if (vm.count("similarity-bandwidth"))
+    p.similarity_bandwidth = vm["similarity-bandwidth"].as<float>();
+  p.seed = vm["seed"].as<std::uint64_t>();
+  if (vm.count("normal-window"))
+    p.normal_window = vm["normal-window"].as<int>();
+  if (vm.count("direct"))
+    p.evaluation = Evaluation::direct;
+  if (vm.count("line-of-sight"))
+    p.displacement = Displacement::line_of_sight;
+  if ((vm.count("distance-bandwidth") && !(p.distance_bandwidth > 0.0f)) ||
+      (vm.count("similarity-bandwidth") && !(p.similarity_bandwidth > 0.0f)))
+    throw UsageError("a bandwidth given on the command line must be a positive number (omit it for automatic)");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  return p;
+}
+
+std::vector<std::string>
+listFrames(const std::string& directory, const std::string& extension)
+{
+  std::error_code ec;
+  if (!fs::is_directory(directory, ec))
+    throw InputError("input directory '" + directory + "' does not exist or is not a directory");
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(directory, ec)) {
+    if (!entry.is_regular_file())
+      continue;
+    const std::string name = entry.path().filename().string();
+    if (name.size() > extension.size() &&
+        name.compare(name.size() - extension.size(), extension.size(), extension) == 0 &&
+        name[0] != '.')
+      files.push_back(entry.path().string());
+  }
+  if (ec)
+    throw InputError("cannot read directory '" + directory + "': " + ec.message());
+  if (files.empty())
+    throw InputError("input directory '" + directory + "' holds no " + extension + " frame");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void
+prepareOutputDirectory(const std::string& input_dir, const std::string& output_dir, bool allow_same)
+{
+  std::error_code ec;
+  if (fs::exists(output_dir, ec)) {
+    if (!fs::is_directory(output_dir, ec))
+      throw InputError("output '" + output_dir + "' exists and is not a directory");
+    if (!input_dir.empty() && fs::equivalent(input_dir, output_dir, ec) && !allow_same)
+      throw InputError("output directory '" + output_dir +
+                       "' is the input directory; refusing to overwrite the input (use --overwrite)");
+    return;
+  }
+  fs::create_directories(output_dir, ec);
+  if (ec)
+    throw InputError("cannot create output directory '" + output_dir + "': " + ec.message());
+}
+
+std::string
+joinPath(const std::string& directory, const std::string& name)
+{
+  return (fs::path(directory) / name).string();
+}
+
+std::string
+fileName(const std::string& path)
+{
+  return fs::path(path).filename().string();
+}
+
+Progress::Progress(std::size_t total, bool quiet)
+    : total_(total), enabled_(!quiet && ::isatty(2)), start_(std::chrono::steady_clock::now())
+{
+}
+
+void
+Progress::update(std::size_t done)
+{
+  if (!enabled_ || total_ == 0)
+    return;
+  const double seconds = millisecondsSince(start_) / 1000.0;
+  const double fps = seconds > 0 ? done / seconds : 0.0;
+  const double left = fps > 0 ? (total_ - done) / fps : 0.0;
+  const int width = 30;
+  const int filled = static_cast<int>(width * done / total_);
+  std::ostringstream line;
+  line << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] " << done << "/"
+       << total_ << "  " << std::fixed << std::setprecision(2) << fps << " frames/s  "
+       << std::setprecision(0) << left << " s left ";
+  std::cerr << line.str() << std::flush;
+}
+
+void
+Progress::finish()
+{
+  if (enabled_)
+    std::cerr << "\n";
+}
+
+double
+millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void
+addDepthImageOptions(po::options_description& options)
+{
+  const DepthIntrinsics d;
+  // clang-format off
+  options.add_options()
+    ("fx", po::value<double>()->default_value(d.fx), "depth PNG input: focal length along x, pixels")
+    ("fy", po::value<double>()->default_value(d.fy), "depth PNG input: focal length along y, pixels")
+    ("cx", po::value<double>()->default_value(d.cx), "depth PNG input: principal point column, pixels")
+    ("cy", po::value<double>()->default_value(d.cy), "depth PNG input: principal point row, pixels")
+    ("depth-scale", po::value<double>()->default_value(d.depth_scale),
+     "depth PNG values per metre: z = value / scale (TUM 5000, RealSense/Azure 1000)")
+    ("intrinsics", po::value<std::string>(),
+     "intrinsics.txt with fx, fy, cx, cy and the depth scale; options given explicitly override it [default: none]");
+  // clang-format on
+}
+
+DepthIntrinsics
+depthIntrinsicsFrom(const po::variables_map& vm)
+{
+  DepthIntrinsics intrinsics;
+  if (vm.count("intrinsics")) {
+    try {
+      intrinsics = readIntrinsics(vm["intrinsics"].as<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw InputError(e.what());
+    }
+  }
+  const std::pair<const char*, double*> fields[] = {{"fx", &intrinsics.fx},
+                                                    {"fy", &intrinsics.fy},
+                                                    {"cx", &intrinsics.cx},
+                                                    {"cy", &intrinsics.cy},
+                                                    {"depth-scale", &intrinsics.depth_scale}};
+  for (const auto& field : fields) {
+    if (!vm.count(field.first))
+      continue;
+    if (!vm[field.first].defaulted() || !vm.count("intrinsics"))
+      *field.second = vm[field.first].as<double>();
+  }
+  try {
+    intrinsics.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string(e.what()) + " (check --fx, --fy, --cx, --cy, --depth-scale and --intrinsics)");
+  }
+  return intrinsics;
+}
+
+std::vector<std::string>
+listInputFrames(const std::string& directory)
+{
+  try {
+    return listFrames(directory, ".pcd");
+  } catch (const InputError&) {
+    std::error_code ec;
+    if (!fs::is_directory(directory, ec))
+      throw;
+  }
+  try {
+    return listFrames(directory, ".png");
+  } catch (const InputError&) {
+    throw InputError("input directory '" + directory + "' holds no .pcd frame and no .png depth image");
+  }
+}
+
+std::string
+replaceExtension(const std::string& path, const std::string& extension)
+{
+  return fs::path(path).replace_extension(extension).string();
+}
+
+} // namespace tools
+} // namespace range_nlm

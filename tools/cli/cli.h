@@ -1,0 +1,118 @@
+// The one helper shared by the range_nlm_* tools and the benchmark: error exits, option parsing,
+// filter and depth-image options, sorted frame lists, output directories and progress display.
+// Reading and writing frames is range_nlm::io (pcd_file.h, depth_image.h).
+#pragma once
+
+#include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/pcd_file.h>
+#include <range_nlm/parameters.h>
+
+#include <boost/program_options.hpp>
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <chrono>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace range_nlm
+{
+namespace tools
+{
+using io::LoadedCloud;
+using io::loadCloud;
+using io::xyzFromBlob;
+using io::writeXyzToBlob;
+using io::saveCloudAtomic;
+using io::isDepthImagePath;
+using io::loadFrame;
+
+
+/// Wrong command line: exit status 2.
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+/// Unreadable or invalid input, failed processing: exit status 1.
+using io::InputError;
+
+/// Runs `body` and maps exceptions to one-line messages on stderr and exit statuses
+/// (0 success, 1 input/processing error, 2 usage error).
+int
+runTool(const std::string& tool, const std::function<int()>& body);
+
+/// Parses argv against `options` (+ positional), throwing UsageError with boost's message.
+/// Returns false if --help was given (help text already printed to stdout).
+bool
+parseCommandLine(int argc, char** argv, const boost::program_options::options_description& options,
+                 const boost::program_options::positional_options_description& positional,
+                 boost::program_options::variables_map& vm, const std::string& usage);
+
+/// Adds --search-window, --patch, --iterations, --threads, --distance-bandwidth,
+/// --similarity-bandwidth, --seed, --normal-window, --preset, --direct, --line-of-sight.
+void
+addFilterOptions(boost::program_options::options_description& options);
+/// Builds validated FilterParameters from the options added by addFilterOptions.
+FilterParameters
+filterParametersFrom(const boost::program_options::variables_map& vm);
+
+/// The *.pcd files of a directory, sorted by name. Throws InputError if the directory is
+/// missing or holds no .pcd file.
+std::vector<std::string>
+listFrames(const std::string& directory, const std::string& extension = ".pcd");
+
+/// Throws InputError if an output directory is the input directory (unless allowed), or
+/// creates it if missing.
+void
+prepareOutputDirectory(const std::string& input_dir, const std::string& output_dir, bool allow_same);
+
+/// Joins a directory and a file name.
+std::string
+joinPath(const std::string& directory, const std::string& name);
+/// The file name part of a path.
+std::string
+fileName(const std::string& path);
+
+/// Progress of a long run: a bar on a terminal (stderr), nothing when quiet or not a terminal.
+class Progress
+{
+public:
+  Progress(std::size_t total, bool quiet);
+  void update(std::size_t done);
+  void finish();
+
+private:
+  std::size_t total_;
+  bool enabled_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// Milliseconds since `start`.
+double
+millisecondsSince(std::chrono::steady_clock::time_point start);
+
+/// Adds the options of 16-bit depth-PNG input: --fx, --fy, --cx, --cy (pixels), --depth-scale
+/// (stored values per metre) with the DepthIntrinsics defaults, and --intrinsics FILE.
+void
+addDepthImageOptions(boost::program_options::options_description& options);
+/// Intrinsics from those options: the defaults, overridden by --intrinsics FILE, overridden by
+/// every value given explicitly on the command line. Throws UsageError naming the option on an
+/// invalid value, InputError naming the file if the intrinsics file is unreadable or invalid.
+DepthIntrinsics
+depthIntrinsicsFrom(const boost::program_options::variables_map& vm);
+
+/// The frames of an input directory, sorted by name: its *.pcd files if it has any, otherwise
+/// its *.png depth images. Throws InputError if the directory is missing or holds neither.
+std::vector<std::string>
+listInputFrames(const std::string& directory);
+
+/// `path` with its extension replaced by `extension` (e.g. ".png").
+std::string
+replaceExtension(const std::string& path, const std::string& extension);
+
+} // namespace tools
+} // namespace range_nlm
