@@ -27,7 +27,11 @@ struct Grid
 
   /// Copies `width * height` points from interleaved memory: point i's x, y, z are the floats at
   /// `data + i * stride_floats + {0, 1, 2}` (the layout of every PCL point type with x, y, z).
-  /// Non-finite points become invalid (NaN in x, y and z).
+  /// Non-finite points become invalid (NaN in x, y and z). Reuses the grid's storage. Returns the
+  /// index of the first point with an infinite coordinate, or -1: the filters refuse such input
+  /// (an infinity is not a documented invalid marker), the evaluation treats it as invalid.
+  std::ptrdiff_t assignInterleaved(const float* data, int width, int height, std::size_t stride_floats);
+  /// A new grid from interleaved memory, as assignInterleaved, with infinite points invalid.
   static Grid fromInterleaved(const float* data, int width, int height, std::size_t stride_floats);
   /// Recomputes `valid` from x, y, z and writes NaN into all three coordinates of invalid points.
   void updateValidity();

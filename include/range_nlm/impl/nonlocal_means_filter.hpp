@@ -26,51 +26,16 @@ toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what)
         << cloud.height << "); the filter needs a grid such as a depth-camera frame";
     throw std::invalid_argument(msg.str());
   }
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(cloud.size());
-  grid.width = static_cast<int>(cloud.width);
-  grid.height = static_cast<int>(cloud.height);
-  // Every element is written below: resizing to the size it already has costs nothing.
-  grid.x.resize(n);
-  grid.y.resize(n);
-  grid.z.resize(n);
-  grid.valid.resize(n);
-  // Branch-free on the bits of the coordinates (a branch per point mispredicts wherever valid and
-  // invalid points alternate): |x| below the exponent's all-ones pattern is finite, equal to it is
-  // infinite. The position of an infinity is looked for only once one was seen.
-  const std::uint32_t nan_bits = 0x7fc00000u; // quiet NaN
-  const std::uint32_t inf_bits = 0x7f800000u; // |x| of an infinity; finite below
-  std::uint32_t infinite = 0;
-  float* __restrict gx = grid.x.data();
-  float* __restrict gy = grid.y.data();
-  float* __restrict gz = grid.z.data();
-  unsigned char* __restrict gv = grid.valid.data();
-  const PointT* __restrict points = cloud.points.data();
-#pragma omp parallel for simd schedule(static) reduction(| : infinite)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    const PointT& p = points[i];
-    std::uint32_t bx, by, bz;
-    std::memcpy(&bx, &p.x, sizeof bx);
-    std::memcpy(&by, &p.y, sizeof by);
-    std::memcpy(&bz, &p.z, sizeof bz);
-    const std::uint32_t ax = bx & 0x7fffffffu, ay = by & 0x7fffffffu, az = bz & 0x7fffffffu;
-    const std::uint32_t ok = std::uint32_t{ax < inf_bits} & std::uint32_t{ay < inf_bits} & std::uint32_t{az < inf_bits};
-    infinite |= std::uint32_t{ax == inf_bits} | std::uint32_t{ay == inf_bits} | std::uint32_t{az == inf_bits};
-    const std::uint32_t keep = 0u - ok;
-    bx = (bx & keep) | (nan_bits & ~keep);
-    by = (by & keep) | (nan_bits & ~keep);
-    bz = (bz & keep) | (nan_bits & ~keep);
-    std::memcpy(&gx[i], &bx, sizeof bx);
-    std::memcpy(&gy[i], &by, sizeof by);
-    std::memcpy(&gz[i], &bz, sizeof bz);
-    gv[i] = static_cast<unsigned char>(ok);
+  if (cloud.points.size() != static_cast<std::size_t>(cloud.width) * cloud.height) {
+    std::ostringstream msg;
+    msg << "range_nlm: the " << what << " holds " << cloud.points.size() << " points but declares width x height = "
+        << cloud.width << " x " << cloud.height;
+    throw std::invalid_argument(msg.str());
   }
-  std::ptrdiff_t first_infinite = n;
-  for (std::ptrdiff_t i = 0; infinite && i < n; ++i)
-    if (std::isinf(cloud[i].x) || std::isinf(cloud[i].y) || std::isinf(cloud[i].z)) {
-      first_infinite = i;
-      break;
-    }
-  if (first_infinite < n) {
+  // The points' x, y, z are the first three floats of every PCL point type that has them.
+  const std::ptrdiff_t first_infinite = grid.assignInterleaved(
+      &cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height), sizeof(PointT) / sizeof(float));
+  if (first_infinite >= 0) {
     std::ostringstream msg;
     msg << "range_nlm: the " << what << " has an infinite coordinate at pixel (" << first_infinite % cloud.width
         << ", " << first_infinite / cloud.width << "); invalid points must be NaN";
