@@ -1006,93 +1006,56 @@ printJson(std::ostream& out, const Settings& s, const RunInfo& info, const std::
   out << "]}" << std::endl;
 }
 
-int
-run(int argc, char** argv)
+/// --quality or --temporal-comparison: accuracy instead of timing.
+void
+runComparison(const po::variables_map& vm)
 {
-  const std::string default_input = kDataDir + "/milk_cartoon_all_small_clorox.pcd";
-  const std::string default_sequence = kDataDir + "/kinect-sequence";
-  po::options_description options("Options");
-  // clang-format off
-  options.add_options()
-    ("help,h", "print this help")
-    ("input", po::value<std::string>()->default_value(default_input),
-     "organized PCD frame of the static configuration (and of --synthetic-frames, --sequence-memory)")
-    ("sequence-dir", po::value<std::string>()->default_value(default_sequence),
-     "directory whose first 3 .pcd frames (name order), cropped to their centre 480x400, form the temporal configuration")
-    ("synthetic-frames", "temporal configuration: 3 copies of the --input centre crop with fresh noise instead of --sequence-dir")
-    ("config", po::value<std::string>()->default_value("all"), "configurations to time: all, static or temporal")
-    ("preset", po::value<std::string>()->default_value("default"),
-     "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
-    ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")
-    ("runs", po::value<int>()->default_value(5), "timed runs per method, each right after an untimed warm-up run; the median is reported")
-    ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
-    ("all", "also give the temporal direct path --runs runs with warm-ups (default: timed once without one, it is very slow)")
-    ("no-direct", "leave out the direct (reference) evaluation, which takes minutes in the temporal configuration")
-    ("breakdown", "time the kernel phases (normals, pre-smoothing, bandwidths, offsets) of each configuration")
-    ("sequence-memory", po::value<int>()->default_value(0),
-     "N > 0: run TemporalStream (radius 1) over N noisy copies of --input and report its peak memory; 0 = off")
-    ("sequence-search", po::value<int>()->default_value(kTemporalSearch), "search window S of the --sequence-memory run")
-    ("sequence-patch", po::value<int>()->default_value(kTemporalPatch), "patch size P of the --sequence-memory run")
-    ("mls-radius", po::value<double>()->default_value(0.0),
-     "MovingLeastSquares search radius in cloud units; 0 = the radius of a disc with the 7x7 window's area at the frame's median pixel spacing")
-    ("seed", po::value<std::uint64_t>()->default_value(1), "seed of the fresh noise of generated frames")
-    ("json", "print one JSON object instead of the table")
-    ("json-file", po::value<std::string>(), "also write that JSON object to this file")
-    ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
-    ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
-    ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
-    ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
-    ("quiet,q", "no progress lines on stderr");
-  // clang-format on
-  po::positional_options_description positional;
-  po::variables_map vm;
-  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
-    return 0;
-
-  if (vm.count("quality") || vm.count("temporal-comparison")) {
-    const bool json = vm.count("json") > 0;
-    std::ostringstream sink;
-    std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
-    std::ostringstream report, json_text;
-    if (vm.count("quality")) {
-      quality::Options q = quality::defaultOptions();
-      q.threads = vm["threads"].as<int>();
-      int w = 0, h = 0;
-      char x = 0;
-      std::istringstream size(vm["quality-size"].as<std::string>());
-      if (!(size >> w >> x >> h) || x != 'x' || w < 16 || h < 16)
-        throw UsageError("--quality-size '" + vm["quality-size"].as<std::string>() + "' is invalid: expected WxH, at least 16x16");
-      for (auto& scenario : q.scenarios)
-        scenario.width = w, scenario.height = h;
-      const auto rows = quality::run(q, log);
-      quality::printJson(rows, json_text);
-      if (json)
-        quality::printJson(rows, report);
-      else
-        quality::printTable(rows, report);
-    } else {
-      temporal::Options t;
-      t.frames = vm["temporal-frames"].as<int>();
-      t.threads = vm["threads"].as<int>();
-      if (t.frames < 3)
-        throw UsageError("--temporal-frames must be at least 3");
-      const auto rows = temporal::run(t, log);
-      temporal::printJson(rows, json_text);
-      if (json)
-        temporal::printJson(rows, report);
-      else
-        temporal::printTable(rows, t, report);
-    }
-    std::cout << report.str();
-    if (vm.count("json-file")) {
-      std::ofstream file(vm["json-file"].as<std::string>());
-      file << json_text.str();
-      if (!file)
-        throw InputError("cannot write '" + vm["json-file"].as<std::string>() + "'");
-    }
-    return 0;
+  const bool json = vm.count("json") > 0;
+  std::ostringstream sink;
+  std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
+  std::ostringstream report, json_text;
+  if (vm.count("quality")) {
+    quality::Options q = quality::defaultOptions();
+    q.threads = vm["threads"].as<int>();
+    int w = 0, h = 0;
+    char x = 0;
+    std::istringstream size(vm["quality-size"].as<std::string>());
+    if (!(size >> w >> x >> h) || x != 'x' || w < 16 || h < 16)
+      throw UsageError("--quality-size '" + vm["quality-size"].as<std::string>() + "' is invalid: expected WxH, at least 16x16");
+    for (auto& scenario : q.scenarios)
+      scenario.width = w, scenario.height = h;
+    const auto rows = quality::run(q, log);
+    quality::printJson(rows, json_text);
+    if (json)
+      quality::printJson(rows, report);
+    else
+      quality::printTable(rows, report);
+  } else {
+    temporal::Options t;
+    t.frames = vm["temporal-frames"].as<int>();
+    t.threads = vm["threads"].as<int>();
+    if (t.frames < 3)
+      throw UsageError("--temporal-frames must be at least 3");
+    const auto rows = temporal::run(t, log);
+    temporal::printJson(rows, json_text);
+    if (json)
+      temporal::printJson(rows, report);
+    else
+      temporal::printTable(rows, t, report);
   }
+  std::cout << report.str();
+  if (vm.count("json-file")) {
+    std::ofstream file(vm["json-file"].as<std::string>());
+    file << json_text.str();
+    if (!file)
+      throw InputError("cannot write '" + vm["json-file"].as<std::string>() + "'");
+  }
+}
 
+/// The timing run's settings from the command line, each checked.
+Settings
+settingsFrom(const po::variables_map& vm)
+{
   Settings s;
   s.input = vm["input"].as<std::string>();
   s.sequence_dir = vm["sequence-dir"].as<std::string>();
@@ -1151,6 +1114,13 @@ run(int argc, char** argv)
                      " is invalid: must be odd and >= 1");
   s.threads = resolveThreads(threads);
 
+  return s;
+}
+
+/// Times range_nlm against PCL's filters and prints the table or the JSON object.
+void
+runTiming(const Settings& s)
+{
   RunInfo info;
   const auto start = std::chrono::steady_clock::now();
   info.load_start = bench::loadAverage();
@@ -1228,6 +1198,55 @@ run(int argc, char** argv)
     ++failed;
   if (failed > 0)
     throw InputError(std::to_string(failed) + " measurement(s) failed; see the report above");
+}
+
+int
+run(int argc, char** argv)
+{
+  const std::string default_input = kDataDir + "/milk_cartoon_all_small_clorox.pcd";
+  const std::string default_sequence = kDataDir + "/kinect-sequence";
+  po::options_description options("Options");
+  // clang-format off
+  options.add_options()
+    ("help,h", "print this help")
+    ("input", po::value<std::string>()->default_value(default_input),
+     "organized PCD frame of the static configuration (and of --synthetic-frames, --sequence-memory)")
+    ("sequence-dir", po::value<std::string>()->default_value(default_sequence),
+     "directory whose first 3 .pcd frames (name order), cropped to their centre 480x400, form the temporal configuration")
+    ("synthetic-frames", "temporal configuration: 3 copies of the --input centre crop with fresh noise instead of --sequence-dir")
+    ("config", po::value<std::string>()->default_value("all"), "configurations to time: all, static or temporal")
+    ("preset", po::value<std::string>()->default_value("default"),
+     "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
+    ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")
+    ("runs", po::value<int>()->default_value(5), "timed runs per method, each right after an untimed warm-up run; the median is reported")
+    ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
+    ("all", "also give the temporal direct path --runs runs with warm-ups (default: timed once without one, it is very slow)")
+    ("no-direct", "leave out the direct (reference) evaluation, which takes minutes in the temporal configuration")
+    ("breakdown", "time the phases of the filter pipeline (normals, pre-smoothing, bandwidths, offsets, ...) of each configuration, as runFilter reports them")
+    ("sequence-memory", po::value<int>()->default_value(0),
+     "N > 0: run TemporalStream (radius 1) over N noisy copies of --input and report its peak memory; 0 = off")
+    ("sequence-search", po::value<int>()->default_value(kTemporalSearch), "search window S of the --sequence-memory run")
+    ("sequence-patch", po::value<int>()->default_value(kTemporalPatch), "patch size P of the --sequence-memory run")
+    ("mls-radius", po::value<double>()->default_value(0.0),
+     "MovingLeastSquares search radius in cloud units; 0 = the radius of a disc with the 7x7 window's area at the frame's median pixel spacing")
+    ("seed", po::value<std::uint64_t>()->default_value(1), "seed of the fresh noise of generated frames")
+    ("json", "print one JSON object instead of the table")
+    ("json-file", po::value<std::string>(), "also write that JSON object to this file")
+    ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
+    ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
+    ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
+    ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
+    ("quiet,q", "no progress lines on stderr");
+  // clang-format on
+  po::positional_options_description positional;
+  po::variables_map vm;
+  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
+    return 0;
+
+  if (vm.count("quality") || vm.count("temporal-comparison"))
+    runComparison(vm);
+  else
+    runTiming(settingsFrom(vm));
   return 0;
 }
 
