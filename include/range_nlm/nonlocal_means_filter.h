@@ -37,6 +37,10 @@ public:
   /// mu_d and sigma_s as estimated by the last filter() call.
   const Bandwidths& getBandwidths() const { return bandwidths_; }
 
+  /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
+  /// progress or timing); null for none. Not owned.
+  void setStageObserver(StageObserver* observer) { workspace_.observer = observer; }
+
 protected:
   void applyFilter(PointCloud& output) override;
 

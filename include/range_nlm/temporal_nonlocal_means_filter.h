@@ -49,6 +49,10 @@ public:
   /// Bandwidths per frame of the last filter() call.
   const std::vector<Bandwidths>& getFrameBandwidths() const { return frame_bandwidths_; }
 
+  /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
+  /// progress or timing); null for none. Not owned.
+  void setStageObserver(StageObserver* observer) { workspace_.observer = observer; }
+
 protected:
   void applyFilter(PointCloud& output) override;
 

@@ -48,7 +48,7 @@ estimateBandwidths(const Grid& grid, const NormalField& normals, int search_wind
     first[b + 1] += first[b];
   const std::size_t candidates = first[blocks];
   if (candidates == 0)
-    throw std::invalid_argument("range_nlm: the cloud has no valid point with a normal; nothing to "
+    throw UnfilterableFrame("range_nlm: the cloud has no valid point with a normal; nothing to "
                                 "estimate the bandwidths from (all points NaN?)");
   // A 64-bit Mersenne twister with our own index mapping: identical on every platform. The
   // samples are visited in index order (they are summed in double; the order only changes
@@ -173,7 +173,7 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
     if (grid.valid[i])
       candidates.push_back(static_cast<int>(i));
   if (candidates.empty())
-    throw std::invalid_argument("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
+    throw UnfilterableFrame("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
   std::mt19937_64 rng(seed);
   // At least the 3 x 3 neighbourhood: a plane fit needs 4 points, and a 1 x 1 search window (which
   // moves nothing) must not make the noise estimate impossible.
@@ -219,7 +219,7 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
     found.push_back(Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)});
   }
   if (found.empty())
-    throw std::invalid_argument("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
+    throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
   std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
   const std::size_t bins = std::clamp<std::size_t>(found.size() / 64, 1, 8);
   NoiseProfile profile;

@@ -281,7 +281,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       throw std::invalid_argument(msg.str());
     }
   if (input.countValid() == 0)
-    throw std::invalid_argument("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
+    throw UnfilterableFrame("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
 
   // OpenMP treats num_threads(0) as an error; map 0 to the runtime's default.
   const int threads = detail::resolveThreads(parameters.threads);
@@ -362,7 +362,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
         continue;
       try {
         estimateFrame(k, *frames[k], nullptr, input_rho_median);
-      } catch (const std::invalid_argument&) {
+      } catch (const UnfilterableFrame&) {
         usable[k] = false; // an all-NaN neighbour contributes nothing
       }
     }

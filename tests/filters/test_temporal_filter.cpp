@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <string>
 #include <deque>
 
 using namespace range_nlm;
@@ -237,4 +239,44 @@ TEST(TemporalFilter, MismatchedFrameSizesAreRejected)
   EXPECT_THROW(stream.push(other), std::invalid_argument);
   EXPECT_THROW(t.setFrames({frames[0]}, 3), std::invalid_argument);
   EXPECT_THROW(TemporalStream<pcl::PointXYZ>(-1, false, FilterParameters()), std::invalid_argument);
+}
+
+TEST(TemporalFilter, StreamPassesAnAllNanFrameThroughAndGoesOn)
+{
+  const FilterParameters p = FilterParameters::recommended();
+  std::vector<Cloud::ConstPtr> frames = sequence(4, 0, 0.003, 80);
+  Cloud::Ptr covered(new Cloud(*frames[1]));
+  for (auto& q : covered->points)
+    q.x = q.y = q.z = std::numeric_limits<float>::quiet_NaN();
+  covered->is_dense = false;
+  frames[1] = covered;
+
+  TemporalStream<pcl::PointXYZ> stream(1, false, p);
+  std::vector<Cloud::Ptr> out;
+  std::vector<std::string> problems;
+  auto take = [&](const std::vector<Cloud::Ptr>& ready) {
+    ASSERT_EQ(stream.lastProblems().size(), ready.size());
+    for (std::size_t i = 0; i < ready.size(); ++i) {
+      out.push_back(ready[i]);
+      problems.push_back(stream.lastProblems()[i]);
+    }
+  };
+  for (const auto& f : frames)
+    take(stream.push(f));
+  take(stream.flush());
+  ASSERT_EQ(out.size(), 4u);
+  // The covered frame comes out unchanged (all NaN), with the reason; the others are filtered.
+  for (const auto& q : out[1]->points)
+    EXPECT_TRUE(std::isnan(q.x) && std::isnan(q.y) && std::isnan(q.z));
+  EXPECT_NE(problems[1].find("no valid point"), std::string::npos) << problems[1];
+  for (std::size_t k : {0u, 2u, 3u})
+    EXPECT_TRUE(problems[k].empty()) << k << ": " << problems[k];
+  // As a neighbour it contributes nothing: frame 0's window {0, 1} gives frame 0 filtered alone.
+  const Cloud alone = staticFilter(*frames[0], p);
+  EXPECT_LT(maxDistance(*out[0], alone), 1e-6);
+  // A filter call on the covered frame itself says why it cannot filter it.
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setInputCloud(covered);
+  Cloud unused;
+  EXPECT_THROW(f.filter(unused), UnfilterableFrame);
 }

@@ -9,10 +9,19 @@
 
 #include <array>
 #include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 namespace range_nlm
 {
+
+/// The frame's data leave nothing to filter: no valid point, or too few valid neighbours for the
+/// noise estimate. The message says which. A std::invalid_argument, so that callers that catch bad
+/// input catch it too; TemporalStream passes such frames through unchanged.
+struct UnfilterableFrame : std::invalid_argument
+{
+  using std::invalid_argument::invalid_argument;
+};
 
 /// Sensor position the normals are oriented toward, in cloud coordinates.
 using Viewpoint = std::array<float, 3>;

@@ -24,6 +24,7 @@ template <typename PointT>
 typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
+  last_problems_.emplace_back();
   if (!wanted_[t - first_])
     return nullptr;
   const std::size_t lo = t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0;
@@ -38,7 +39,17 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   filter_.setParameters(parameters_);
   filter_.setFrames(frames, t - std::max(lo, first_));
   CloudPtr out(new PointCloud);
-  filter_.filter(*out);
+  try {
+    filter_.filter(*out);
+  } catch (const UnfilterableFrame& e) {
+    // Passed through unchanged; a live stream must not stop at one covered or dropped frame.
+    filter_.clearFrames();
+    *out = *window_[t - first_];
+    last_weights_.clear();
+    last_bandwidths_ = Bandwidths();
+    last_problems_.back() = e.what();
+    return out;
+  }
   // The window alone decides which frames stay in memory.
   filter_.clearFrames();
   last_weights_ = filter_.getFrameWeights();
@@ -76,6 +87,7 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
   }
   window_.push_back(frame);
   wanted_.push_back(wanted);
+  last_problems_.clear();
   ++pushed_;
   std::vector<CloudPtr> ready;
   // Frame t is ready once t + r (causal: t) has been pushed.
@@ -93,6 +105,7 @@ template <typename PointT>
 std::vector<typename TemporalStream<PointT>::CloudPtr>
 TemporalStream<PointT>::flush()
 {
+  last_problems_.clear();
   std::vector<CloudPtr> ready;
   while (emitted_ < pushed_) {
     ready.push_back(filterAt(emitted_));
