@@ -6,13 +6,25 @@
 #include <range_nlm/temporal_nonlocal_means_filter.h>
 #include <range_nlm/temporal_stream.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <deque>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace po = boost::program_options;
 using namespace range_nlm;
@@ -31,7 +43,13 @@ const char* const kUsage =
     "the input is kept; only x, y, z move. Outputs are binary PCD.\n"
     "16-bit depth PNGs (INPUT.png, or a directory of *.png) are read with the intrinsics options;\n"
     "--output-format png writes 16-bit depth PNGs with the same depth scale, --colorize curvature\n"
-    "writes PointXYZRGB clouds coloured by mean curvature.";
+    "writes PointXYZRGB clouds coloured by mean curvature.\n"
+    "A frame that cannot be filtered (all NaN, or too few valid points) is written unchanged and\n"
+    "reported. A frame that cannot be read (missing, truncated, malformed, another size than the\n"
+    "sequence) stops the run after every frame before it is written, or with --keep-going is\n"
+    "skipped and listed at the end.\n"
+    "Exit status: 0 done, 1 error (a frame could not be read or written), 2 usage error,\n"
+    "3 done with --keep-going but some frames were skipped.";
 
 /// One filter pass of a schedule: parameters and temporal radius.
 struct Pass
@@ -93,6 +111,9 @@ struct PendingFrame
   LoadedCloud loaded;
   std::string input_path;
   std::string output_path;
+  /// Why the frame could not be read (--keep-going: an all-NaN stand-in was pushed in its place,
+  /// so that its neighbours' windows stay as they are; nothing is written for it).
+  std::string unreadable;
 };
 
 struct FrameReport
@@ -100,6 +121,8 @@ struct FrameReport
   std::string name;
   double milliseconds = 0.0;
   Bandwidths bandwidths;
+  /// Why it was written unchanged (empty: filtered).
+  std::string unfiltered;
 };
 
 /// The frames a pass reads to filter the `needed` ones.
@@ -115,13 +138,20 @@ framesRead(const Pass& pass, const std::vector<bool>& needed)
   return read;
 }
 
+/// What became of one input frame that came out of the chain.
+struct ChainOutput
+{
+  Cloud::ConstPtr cloud; // null: not wanted (--resume: finished before)
+  TemporalStream<pcl::PointXYZ>::OutputInfo info; // of the first pass
+};
+
 /// The chain of passes, each a TemporalStream, feeding the next.
 class PassChain
 {
 public:
   /// `wanted[t]`: the result of frame t is to be written. From the last pass back, each pass
   /// filters only the frames that the next one reads.
-  PassChain(const std::vector<Pass>& passes, const std::vector<bool>& wanted)
+  PassChain(const std::vector<Pass>& passes, const std::vector<bool>& wanted, StageObserver* observer)
   {
     std::vector<std::vector<bool>> needed(passes.size());
     std::vector<bool> next = wanted;
@@ -130,17 +160,18 @@ public:
       next = framesRead(passes[level], next);
     }
     inputs_read_ = next;
-    for (std::size_t level = 0; level < passes.size(); ++level)
+    for (std::size_t level = 0; level < passes.size(); ++level) {
       levels_.push_back({std::make_unique<TemporalStream<pcl::PointXYZ>>(passes[level].radius, passes[level].causal,
                                                                           passes[level].parameters),
-                         needed[level]});
+                         needed[level], 0, {}});
+      levels_.back().stream->setStageObserver(observer);
+    }
   }
   /// False if no result depends on input frame t: it need not even be loaded.
   bool inputRead(std::size_t t) const { return inputs_read_[t]; }
-  /// Pushes a frame through every pass; returns the finished frames (null: not wanted).
-  std::vector<Cloud::ConstPtr> push(const Cloud::ConstPtr& frame) { return feed(0, {frame}, false); }
-  std::vector<Cloud::ConstPtr> flush() { return feed(0, {}, true); }
-  const Bandwidths& firstPassBandwidths() const { return levels_.front().stream->lastBandwidths(); }
+  /// Pushes a frame through every pass; returns the finished frames in order.
+  std::vector<ChainOutput> push(const Cloud::ConstPtr& frame) { return feed(0, {{frame, {}}}, false); }
+  std::vector<ChainOutput> flush() { return feed(0, {}, true); }
 
 private:
   /// One pass: its stream and which of its frames the next pass (or the output) reads.
@@ -149,18 +180,35 @@ private:
     std::unique_ptr<TemporalStream<pcl::PointXYZ>> stream;
     std::vector<bool> needed;
     std::size_t pushed = 0;
+    std::deque<TemporalStream<pcl::PointXYZ>::OutputInfo> carried;
   };
 
-  std::vector<Cloud::ConstPtr> feed(std::size_t level, const std::vector<Cloud::ConstPtr>& in, bool flush)
+  std::vector<ChainOutput> feed(std::size_t level, const std::vector<ChainOutput>& in, bool flush)
   {
     Level& l = levels_[level];
-    std::vector<Cloud::ConstPtr> out;
-    for (const auto& f : in)
-      for (auto& r : l.stream->push(f, l.needed[l.pushed++]))
-        out.push_back(r);
+    std::vector<ChainOutput> out;
+    // Frames come out of every pass in order: the k-th output is the k-th input, whose record
+    // from the earlier passes is carried along (first problem, first pass's bandwidths, time).
+    auto take = [&](const std::vector<TemporalStream<pcl::PointXYZ>::CloudPtr>& ready) {
+      for (std::size_t i = 0; i < ready.size(); ++i) {
+        ChainOutput o{ready[i], l.stream->lastOutputs()[i]};
+        const TemporalStream<pcl::PointXYZ>::OutputInfo before = l.carried.front();
+        l.carried.pop_front();
+        if (level > 0) {
+          o.info.milliseconds += before.milliseconds;
+          o.info.bandwidths = before.bandwidths;
+          if (!before.problem.empty())
+            o.info.problem = before.problem;
+        }
+        out.push_back(o);
+      }
+    };
+    for (const ChainOutput& f : in) {
+      l.carried.push_back(f.info);
+      take(l.stream->push(f.cloud, l.needed[l.pushed++]));
+    }
     if (flush)
-      for (auto& r : l.stream->flush())
-        out.push_back(r);
+      take(l.stream->flush());
     if (level + 1 == levels_.size())
       return out;
     return feed(level + 1, out, flush);
@@ -170,7 +218,8 @@ private:
 };
 
 /// For --resume: removes the temporary files an interrupted run left beside `outputs`
-/// (".NAME.tmpPID", see saveCloudAtomic).
+/// (".NAME.tmpPID", see saveCloudAtomic). The caller holds the output directory exclusively
+/// (OutputDirectoryLock), so no running range_nlm_denoise can own one of them.
 void
 removeTemporaries(const std::vector<std::string>& outputs)
 {
@@ -183,13 +232,49 @@ removeTemporaries(const std::vector<std::string>& outputs)
   for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec)) {
     const std::string name = entry.path().filename().string();
     for (const std::string& prefix : prefixes)
-      if (name.compare(0, prefix.size(), prefix) == 0 &&
+      if (name.size() > prefix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
           name.find_first_not_of("0123456789", prefix.size()) == std::string::npos) {
         fs::remove(entry.path(), ec);
         break;
       }
   }
 }
+
+/// Holds the directory a run writes into, so that runs cannot trip over each other's files: a
+/// directory run, and any run with --resume (which removes temporary files), holds it
+/// exclusively; a single-frame run shares it with other single-frame runs. A run that cannot get
+/// the lock is refused with a message. An flock on the directory itself, so no file is left
+/// behind; the kernel releases it however the process ends.
+class OutputDirectoryLock
+{
+public:
+  OutputDirectoryLock(const std::string& directory, bool exclusive)
+  {
+    const std::string dir = directory.empty() ? "." : directory;
+    fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd_ < 0)
+      throw InputError("cannot open output directory '" + dir + "': " + std::strerror(errno));
+    if (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
+      const int error = errno;
+      ::close(fd_);
+      fd_ = -1;
+      if (error == EWOULDBLOCK)
+        throw InputError("output directory '" + dir +
+                         "' is in use by another range_nlm_denoise run; wait for it to end or write elsewhere");
+      throw InputError("cannot lock output directory '" + dir + "': " + std::strerror(error));
+    }
+  }
+  ~OutputDirectoryLock()
+  {
+    if (fd_ >= 0)
+      ::close(fd_);
+  }
+  OutputDirectoryLock(const OutputDirectoryLock&) = delete;
+  OutputDirectoryLock& operator=(const OutputDirectoryLock&) = delete;
+
+private:
+  int fd_ = -1;
+};
 
 /// For --resume: `path` holds a complete output of a width x height frame.
 bool
@@ -273,20 +358,21 @@ writeResult(PendingFrame& frame, const Cloud& result, const OutputOptions& out)
   saveCloudAtomic(frame.output_path, frame.loaded.blob, frame.loaded.origin, frame.loaded.orientation);
 }
 
-void
-printReport(const FrameReport& r, bool quiet, bool json)
+/// Everything a run needs, from the command line, checked.
+struct Job
 {
-  if (quiet || json)
-    return;
-  std::cout << r.name << ": " << std::fixed << std::setprecision(1) << r.milliseconds << " ms, d = "
-            << std::setprecision(6) << r.bandwidths.distance << ", s = " << r.bandwidths.similarity
-            << std::endl;
-}
+  std::vector<Pass> passes;
+  bool single = false;
+  std::vector<std::string> inputs, outputs;
+  std::string output_dir; // directory mode
+  DepthIntrinsics intrinsics;
+  OutputOptions output;
+  bool resume = false, keep_going = false, quiet = false, json = false;
+};
 
-int
-run(int argc, char** argv)
+void
+addOptions(po::options_description& options)
 {
-  po::options_description options("Options");
   // clang-format off
   options.add_options()
     ("help,h", "print this help")
@@ -297,10 +383,11 @@ run(int argc, char** argv)
     ("temporal-radius", po::value<int>()->default_value(0), "R: frames on each side used by the temporal filter (0 = static)")
     ("causal", "temporal window uses only past frames (no output delay)")
     ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
-    ("overwrite", "allow the output directory to be the input directory")
+    ("overwrite", "allow the output to be the input (file or directory)")
     ("resume", "skip frames whose output already exists and is a complete frame of the input's size "
                "(temporal runs still read them as neighbours); removes temporary files an interrupted run left")
-    ("quiet,q", "print nothing but errors")
+    ("keep-going", "skip frames that cannot be read (listed at the end, exit status 3) instead of stopping")
+    ("quiet,q", "print nothing but errors (no per-frame lines, no progress)")
     ("json", "print a JSON summary instead of per-frame lines")
     ("colorize", po::value<std::string>(),
      "'curvature': write PointXYZRGB coloured by mean curvature instead of the input's fields [default: keep the fields]")
@@ -312,143 +399,306 @@ run(int argc, char** argv)
   // clang-format on
   addFilterOptions(options);
   addDepthImageOptions(options);
-  po::positional_options_description positional;
-  positional.add("input", 1).add("output", 1);
-  po::variables_map vm;
-  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
-    return 0;
+}
 
-  const bool quiet = vm.count("quiet") > 0;
-  const bool json = vm.count("json") > 0;
+Job
+jobFrom(const po::variables_map& vm)
+{
+  Job job;
+  job.quiet = vm.count("quiet") > 0;
+  job.json = vm.count("json") > 0;
+  job.resume = vm.count("resume") > 0;
+  job.keep_going = vm.count("keep-going") > 0;
   Pass base;
   base.parameters = filterParametersFrom(vm);
   base.radius = vm["temporal-radius"].as<int>();
   base.causal = vm.count("causal") > 0;
   if (base.radius < 0)
     throw UsageError("--temporal-radius must be >= 0, got " + std::to_string(base.radius));
-  std::vector<Pass> passes;
   if (vm.count("pass"))
     for (const std::string& spec : vm["pass"].as<std::vector<std::string>>())
-      passes.push_back(parsePass(spec, base));
+      job.passes.push_back(parsePass(spec, base));
   else
-    passes.push_back(base);
+    job.passes.push_back(base);
 
-  const bool single = vm.count("input") || vm.count("output");
+  job.single = vm.count("input") || vm.count("output");
   const bool directory = vm.count("input-dir") || vm.count("output-dir");
-  if (single == directory)
+  if (job.single == directory)
     throw UsageError("give either INPUT.pcd OUTPUT.pcd or --input-dir DIR --output-dir DIR");
-  std::vector<std::string> inputs;
-  std::vector<std::string> outputs;
-  if (single) {
+  const bool overwrite = vm.count("overwrite") > 0;
+  std::error_code ec;
+  if (job.single) {
     if (!vm.count("input") || !vm.count("output"))
       throw UsageError("single-frame mode needs INPUT.pcd and OUTPUT.pcd");
-    inputs.push_back(vm["input"].as<std::string>());
-    outputs.push_back(vm["output"].as<std::string>());
+    job.inputs.push_back(vm["input"].as<std::string>());
+    job.outputs.push_back(vm["output"].as<std::string>());
+    if (std::filesystem::is_directory(job.outputs.front(), ec))
+      throw InputError("output '" + job.outputs.front() + "' is a directory; give a file name (or use --output-dir)");
+    if (std::filesystem::equivalent(job.inputs.front(), job.outputs.front(), ec) && !overwrite)
+      throw InputError("output '" + job.outputs.front() + "' is the input file; refusing to overwrite the input (use --overwrite)");
   } else {
     if (!vm.count("input-dir") || !vm.count("output-dir"))
       throw UsageError("directory mode needs both --input-dir and --output-dir");
     const std::string in_dir = vm["input-dir"].as<std::string>();
-    const std::string out_dir = vm["output-dir"].as<std::string>();
-    inputs = listInputFrames(in_dir);
-    prepareOutputDirectory(in_dir, out_dir, vm.count("overwrite") > 0);
-    for (const std::string& in : inputs)
-      outputs.push_back(joinPath(out_dir, fileName(in)));
+    job.output_dir = vm["output-dir"].as<std::string>();
+    job.inputs = listInputFrames(in_dir);
+    prepareOutputDirectory(in_dir, job.output_dir, overwrite);
+    for (const std::string& in : job.inputs)
+      job.outputs.push_back(joinPath(job.output_dir, fileName(in)));
   }
-  const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
-  const OutputOptions output_options =
-      outputOptionsFrom(vm, single, inputs.front(), single ? outputs.front() : std::string(), intrinsics);
-  if (!single)
-    for (std::string& output : outputs)
-      output = replaceExtension(output, output_options.png ? ".png" : ".pcd");
+  if (job.resume && (job.single ? std::filesystem::equivalent(job.inputs.front(), job.outputs.front(), ec)
+                                : std::filesystem::equivalent(vm["input-dir"].as<std::string>(), job.output_dir, ec)))
+    throw UsageError("--resume cannot be used when the output is the input (every frame would count as finished)");
+  job.intrinsics = depthIntrinsicsFrom(vm);
+  job.output = outputOptionsFrom(vm, job.single, job.inputs.front(), job.single ? job.outputs.front() : std::string(),
+                                 job.intrinsics);
+  if (!job.single)
+    for (std::string& output : job.outputs)
+      output = replaceExtension(output, job.output.png ? ".png" : ".pcd");
+  return job;
+}
 
+/// What a run did, for the summary and the exit status.
+struct Summary
+{
+  std::vector<FrameReport> written;
+  std::size_t skipped = 0; // --resume: complete output existed
+  std::vector<std::pair<std::string, std::string>> unreadable; // file, error
   unsigned width = 0, height = 0;
-  std::vector<bool> wanted(inputs.size(), true);
-  if (vm.count("resume")) {
-    std::error_code ec;
-    if (single ? std::filesystem::equivalent(inputs.front(), outputs.front(), ec)
-               : std::filesystem::equivalent(vm["input-dir"].as<std::string>(),
-                                             vm["output-dir"].as<std::string>(), ec))
-      throw UsageError("--resume cannot be used when the output is the input (every frame would count as finished)");
-    removeTemporaries(outputs);
-    const LoadedCloud first = loadFrame(inputs.front(), intrinsics);
-    width = first.blob.width;
-    height = first.blob.height;
-    for (std::size_t f = 0; f < inputs.size(); ++f)
-      wanted[f] = !isFinishedOutput(outputs[f], output_options.png, intrinsics, width, height);
+  double wall_ms = 0.0;
+};
+
+/// Reads, filters and writes the frames of a job in order, with reading one frame ahead of the
+/// temporal windows as they need it.
+class FrameRun
+{
+public:
+  explicit FrameRun(const Job& job)
+      : job_(job), wanted_(job.inputs.size(), true),
+        progress_("range_nlm_denoise", job.inputs.size(), iterationsPerFrame(job.passes), !job.quiet)
+  {
   }
 
-  PassChain chain(passes, wanted);
-  std::deque<PendingFrame> pending;
-  std::vector<FrameReport> reports;
-  Progress progress(inputs.size(), quiet || json);
-  const auto run_start = std::chrono::steady_clock::now();
-  std::size_t skipped = 0;
-  auto finish = [&](const std::vector<Cloud::ConstPtr>& results, double ms) {
-    for (const Cloud::ConstPtr& result : results) {
-      PendingFrame frame = std::move(pending.front());
-      pending.pop_front();
-      if (!result) { // --resume: finished before
-        ++skipped;
-        if (!quiet && !json)
-          std::cout << fileName(frame.output_path) << ": skipped (complete output exists)" << std::endl;
-        progress.update(reports.size() + skipped);
+  /// Runs to the end; throws InputError (after writing every frame it could) for a frame that
+  /// cannot be read, unless the job keeps going.
+  Summary run()
+  {
+    const auto start = std::chrono::steady_clock::now();
+    if (job_.resume) {
+      removeTemporaries(job_.outputs);
+      resumeFrom();
+    }
+    PassChain chain(job_.passes, wanted_, &progress_);
+    std::size_t deferred = 0; // unreadable frames before the sequence's size is known
+    for (std::size_t f = 0; f < job_.inputs.size(); ++f) {
+      if (!chain.inputRead(f)) { // finished, and no frame still to filter reads it
+        pending_.push_back(PendingFrame{LoadedCloud(), job_.inputs[f], job_.outputs[f], ""});
+        finish(filtered([&] { return chain.push(nullptr); }));
         continue;
       }
-      writeResult(frame, *result, output_options);
-      FrameReport report{fileName(frame.output_path), ms, chain.firstPassBandwidths()};
-      printReport(report, quiet, json);
-      reports.push_back(report);
-      progress.update(reports.size() + skipped);
+      PendingFrame frame{LoadedCloud(), job_.inputs[f], job_.outputs[f], ""};
+      Cloud::Ptr xyz;
+      try {
+        frame.loaded = loadFrame(job_.inputs[f], job_.intrinsics);
+        checkSize(frame.loaded, job_.inputs[f]);
+        xyz.reset(new Cloud(xyzFromBlob(frame.loaded, job_.inputs[f])));
+      } catch (const InputError& e) {
+        if (!job_.keep_going) {
+          // Every frame already out is written; frames whose window reaches this one are not, so
+          // that --resume after mending it gives exactly the result of a clean run.
+          progress_.finish();
+          throw;
+        }
+        frame.unreadable = e.what();
+        std::cerr << "range_nlm_denoise: skipping a frame: " << e.what() << std::endl;
+      }
+      if (!frame.unreadable.empty() && summary_.width == 0) {
+        pending_.push_back(std::move(frame)); // its stand-in needs the sequence's size
+        ++deferred;
+        continue;
+      }
+      // Stand-ins for the unreadable frames before the first readable one, now that the size is known.
+      for (; deferred > 0; --deferred)
+        finish(filtered([&] { return chain.push(standIn()); }));
+      if (!frame.unreadable.empty())
+        xyz = standIn();
+      pending_.push_back(std::move(frame));
+      finish(filtered([&] { return chain.push(xyz); }));
     }
-  };
-  for (std::size_t f = 0; f < inputs.size(); ++f) {
-    if (!chain.inputRead(f)) { // finished, and no frame still to filter reads it
-      pending.push_back(PendingFrame{LoadedCloud(), inputs[f], outputs[f]});
-      finish(chain.push(nullptr), 0.0);
-      continue;
+    for (; deferred > 0; --deferred) { // nothing could be read at all
+      summary_.unreadable.emplace_back(fileName(pending_.front().input_path), pending_.front().unreadable);
+      pending_.pop_front();
     }
-    PendingFrame frame{loadFrame(inputs[f], intrinsics), inputs[f], outputs[f]};
-    if (width == 0) {
-      width = frame.loaded.blob.width;
-      height = frame.loaded.blob.height;
-    } else if (frame.loaded.blob.width != width || frame.loaded.blob.height != height) {
-      throw InputError("'" + inputs[f] + "': frame is " + std::to_string(frame.loaded.blob.width) + " x " +
-                       std::to_string(frame.loaded.blob.height) + " but the sequence is " +
-                       std::to_string(width) + " x " + std::to_string(height));
-    }
-    Cloud::Ptr xyz(new Cloud(xyzFromBlob(frame.loaded, inputs[f])));
-    pending.push_back(std::move(frame));
-    const auto start = std::chrono::steady_clock::now();
-    std::vector<Cloud::ConstPtr> results;
-    try {
-      results = chain.push(xyz);
-    } catch (const std::invalid_argument& e) {
-      throw InputError("'" + inputs[f] + "': " + e.what());
-    }
-    finish(results, millisecondsSince(start));
+    finish(filtered([&] { return chain.flush(); }));
+    progress_.finish();
+    summary_.wall_ms = millisecondsSince(start);
+    return summary_;
   }
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<Cloud::ConstPtr> results;
-  try {
-    results = chain.flush();
-  } catch (const std::invalid_argument& e) {
-    throw InputError("'" + (pending.empty() ? inputs.back() : pending.front().input_path) + "': " + e.what());
-  }
-  finish(results, millisecondsSince(start));
-  progress.finish();
 
-  if (json) {
-    double total = 0.0;
-    for (const auto& r : reports)
-      total += r.milliseconds;
-    std::cout << "{\"frames\": " << reports.size() << ", \"skipped\": " << skipped << ", \"width\": " << width
-              << ", \"height\": " << height << ", \"filter_ms_total\": " << total
-              << ", \"wall_ms\": " << millisecondsSince(run_start) << ", \"outputs\": [";
-    for (std::size_t i = 0; i < reports.size(); ++i)
-      std::cout << (i ? ", " : "") << "{\"file\": \"" << reports[i].name << "\", \"ms\": " << reports[i].milliseconds
-                << ", \"distance_bandwidth\": " << reports[i].bandwidths.distance
-                << ", \"similarity_bandwidth\": " << reports[i].bandwidths.similarity << "}";
-    std::cout << "]}" << std::endl;
+private:
+  static int iterationsPerFrame(const std::vector<Pass>& passes)
+  {
+    int n = 0;
+    for (const Pass& p : passes)
+      n += p.parameters.iterations;
+    return n;
+  }
+
+  /// Runs a push or flush of the chain; an error of the filter (a parameter that does not fit
+  /// the frames) names the oldest frame not yet written, the one being filtered.
+  template <typename Step>
+  std::vector<ChainOutput> filtered(const Step& step)
+  {
+    try {
+      return step();
+    } catch (const std::invalid_argument& e) {
+      progress_.finish();
+      throw InputError("'" + pending_.front().input_path + "': " + e.what());
+    }
+  }
+
+  /// --resume: which outputs are complete already.
+  void resumeFrom()
+  {
+    for (std::size_t f = 0; f < job_.inputs.size(); ++f) {
+      if (summary_.width == 0) {
+        try {
+          const LoadedCloud first = loadFrame(job_.inputs[f], job_.intrinsics);
+          summary_.width = first.blob.width;
+          summary_.height = first.blob.height;
+        } catch (const InputError&) {
+          continue; // reported when the frame's turn comes
+        }
+      }
+      wanted_[f] = !isFinishedOutput(job_.outputs[f], job_.output.png, job_.intrinsics, summary_.width,
+                                     summary_.height);
+    }
+  }
+
+  void checkSize(const LoadedCloud& loaded, const std::string& path)
+  {
+    if (summary_.width == 0) {
+      summary_.width = loaded.blob.width;
+      summary_.height = loaded.blob.height;
+    } else if (loaded.blob.width != summary_.width || loaded.blob.height != summary_.height) {
+      throw InputError("'" + path + "': frame is " + std::to_string(loaded.blob.width) + " x " +
+                       std::to_string(loaded.blob.height) + " but the sequence is " + std::to_string(summary_.width) +
+                       " x " + std::to_string(summary_.height));
+    }
+  }
+
+  /// An all-NaN frame of the sequence's size: in place of an unreadable one it keeps the other
+  /// frames' windows as they are and contributes nothing to them.
+  Cloud::Ptr standIn() const
+  {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    Cloud::Ptr cloud(new Cloud(summary_.width, summary_.height, pcl::PointXYZ(nan, nan, nan)));
+    cloud->is_dense = false;
+    return cloud;
+  }
+
+  void finish(const std::vector<ChainOutput>& results)
+  {
+    for (const ChainOutput& result : results) {
+      PendingFrame frame = std::move(pending_.front());
+      pending_.pop_front();
+      const std::string name = fileName(frame.output_path);
+      if (!frame.unreadable.empty()) {
+        summary_.unreadable.emplace_back(fileName(frame.input_path), frame.unreadable);
+      } else if (!result.cloud) { // --resume: finished before
+        ++summary_.skipped;
+        if (!job_.quiet && !job_.json)
+          std::cout << name << ": skipped (complete output exists)" << std::endl;
+      } else {
+        writeResult(frame, *result.cloud, job_.output);
+        FrameReport report{name, result.info.milliseconds, result.info.bandwidths, result.info.problem};
+        if (!job_.quiet && !job_.json) {
+          if (report.unfiltered.empty())
+            std::cout << name << ": " << std::fixed << std::setprecision(1) << report.milliseconds << " ms, d = "
+                      << std::setprecision(6) << report.bandwidths.distance << ", s = " << report.bandwidths.similarity
+                      << std::endl;
+          else
+            std::cout << name << ": not filtered, written unchanged (" << report.unfiltered << ")" << std::endl;
+        }
+        summary_.written.push_back(report);
+      }
+      progress_.update(summary_.written.size() + summary_.skipped + summary_.unreadable.size());
+    }
+  }
+
+  const Job& job_;
+  std::vector<bool> wanted_;
+  Progress progress_;
+  std::deque<PendingFrame> pending_;
+  Summary summary_;
+};
+
+void
+printJson(const Summary& s)
+{
+  nlohmann::json out;
+  double total = 0.0;
+  std::size_t unfiltered = 0;
+  nlohmann::json outputs = nlohmann::json::array();
+  for (const FrameReport& r : s.written) {
+    total += r.milliseconds;
+    nlohmann::json o = {{"file", r.name},
+                        {"ms", r.milliseconds},
+                        {"distance_bandwidth", r.bandwidths.distance},
+                        {"similarity_bandwidth", r.bandwidths.similarity},
+                        {"filtered", r.unfiltered.empty()}};
+    if (!r.unfiltered.empty()) {
+      o["reason"] = r.unfiltered;
+      ++unfiltered;
+    }
+    outputs.push_back(o);
+  }
+  nlohmann::json unreadable = nlohmann::json::array();
+  for (const auto& u : s.unreadable)
+    unreadable.push_back({{"file", u.first}, {"error", u.second}});
+  out["frames"] = s.written.size();
+  out["skipped"] = s.skipped;
+  out["unfiltered"] = unfiltered;
+  out["unreadable"] = unreadable;
+  out["width"] = s.width;
+  out["height"] = s.height;
+  out["filter_ms_total"] = total;
+  out["wall_ms"] = s.wall_ms;
+  out["outputs"] = outputs;
+  // Non-finite numbers (an infinite bandwidth) become null; invalid UTF-8 in a file name is
+  // replaced rather than ending the run.
+  std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
+}
+
+int
+run(int argc, char** argv)
+{
+  po::options_description options("Options");
+  addOptions(options);
+  po::positional_options_description positional;
+  positional.add("input", 1).add("output", 1);
+  po::variables_map vm;
+  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
+    return 0;
+  const Job job = jobFrom(vm);
+  const OutputDirectoryLock lock(job.single ? std::filesystem::path(job.outputs.front()).parent_path().string()
+                                             : job.output_dir,
+                                  !job.single || job.resume);
+  FrameRun frames(job);
+  const Summary summary = frames.run();
+  if (job.json)
+    printJson(summary);
+  std::size_t unfiltered = 0;
+  for (const FrameReport& r : summary.written)
+    unfiltered += !r.unfiltered.empty();
+  if (!job.quiet && !job.json && summary.written.size() + summary.skipped > 1 && unfiltered > 0)
+    std::cout << unfiltered << " frame(s) could not be filtered and were written unchanged" << std::endl;
+  if (!summary.unreadable.empty()) {
+    std::cerr << "range_nlm_denoise: " << summary.unreadable.size() << " frame(s) could not be read and were skipped:\n";
+    for (const auto& u : summary.unreadable)
+      std::cerr << "  " << u.first << ": " << u.second << "\n";
+    std::cerr << std::flush;
+    return 3;
   }
   return 0;
 }

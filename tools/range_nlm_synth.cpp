@@ -103,7 +103,7 @@ run(int argc, char** argv)
   prepareOutputDirectory("", truth_dir, false);
 
   const bool quiet = vm.count("quiet") > 0;
-  Progress progress(std::size_t(o.frames), quiet);
+  Progress progress("range_nlm_synth", std::size_t(o.frames), 1, !quiet);
   const auto start = std::chrono::steady_clock::now();
   // Zero-padded to at least 4 digits and to the largest index, so name order is frame order.
   const int digits = std::max(4, int(std::to_string(o.frames - 1).size()));

@@ -19,7 +19,7 @@ namespace range_nlm
 /// Push frames one by one; each filtered frame comes out once its window is complete.
 /// A frame that cannot be filtered (UnfilterableFrame: all NaN, or too few valid points for the
 /// noise estimate, e.g. a covered lens) comes out unchanged, NaN where it was NaN, and the stream
-/// goes on; lastProblems() says which outputs those were. As a neighbour such a frame contributes
+/// goes on; lastOutputs() says which outputs those were. As a neighbour such a frame contributes
 /// nothing.
 /// Centred mode (default): the window of frame t is t - r .. t + r (clipped at the sequence
 /// start and end), so output lags input by r frames. Causal mode: the window is t - r .. t and
@@ -52,9 +52,18 @@ public:
   const std::vector<float>& lastFrameWeights() const { return last_weights_; }
   /// Bandwidths of the current frame of the last frame produced.
   const Bandwidths& lastBandwidths() const { return last_bandwidths_; }
-  /// One entry per frame returned by the last push() or flush(), in the same order: empty if the
-  /// frame was filtered (or not wanted), else why it was passed through unchanged.
-  const std::vector<std::string>& lastProblems() const { return last_problems_; }
+  /// What became of one frame returned by push() or flush().
+  struct OutputInfo
+  {
+    /// Empty if the frame was filtered (or not wanted), else why it was passed through unchanged.
+    std::string problem;
+    /// Bandwidths of the frame (first iteration); zero if it was not filtered.
+    Bandwidths bandwidths;
+    /// Time the filter took for it, milliseconds.
+    double milliseconds = 0.0;
+  };
+  /// One entry per frame returned by the last push() or flush(), in the same order.
+  const std::vector<OutputInfo>& lastOutputs() const { return last_outputs_; }
   /// Told where each phase of every filter run begins and ends (see StageObserver); not owned.
   void setStageObserver(StageObserver* observer) { filter_.setStageObserver(observer); }
 
@@ -73,7 +82,7 @@ private:
   std::size_t emitted_ = 0;
   std::vector<float> last_weights_;
   Bandwidths last_bandwidths_;
-  std::vector<std::string> last_problems_;
+  std::vector<OutputInfo> last_outputs_;
   /// One filter for the whole sequence, so that its buffers are reused from frame to frame.
   TemporalNonLocalMeansFilter<PointT> filter_;
 };

@@ -1,5 +1,8 @@
 #include "test_support.h"
 
+#include <sstream>
+#include <stdexcept>
+
 #include <pcl/common/centroid.h>
 #include <pcl/features/normal_3d.h>
 
@@ -168,6 +171,16 @@ CommandResult
 runDenoise(const std::string& args)
 {
   return runTool("range_nlm_denoise", args);
+}
+
+nlohmann::json
+jsonLine(const std::string& output)
+{
+  std::istringstream lines(output);
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty() && line[0] == '{')
+      return nlohmann::json::parse(line);
+  throw std::runtime_error("no JSON object in the output: " + output);
 }
 
 void

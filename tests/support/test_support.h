@@ -7,6 +7,7 @@
 #include <pcl/point_types.h>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <functional>
@@ -76,6 +77,12 @@ CommandResult
 runDenoise(const std::string& args);
 
 /// Adds NaN holes: each point becomes NaN with probability p.
+/// The JSON object a tool printed with --json: the first line of `output` that starts with '{',
+/// parsed (other lines are progress or messages on stderr). Throws if there is none or it does
+/// not parse.
+nlohmann::json
+jsonLine(const std::string& output);
+
 void
 punchHoles(pcl::PointCloud<pcl::PointXYZ>& cloud, double p, std::uint64_t seed);
 

@@ -106,7 +106,15 @@ TEST_F(DenoiseTool, TemporalAndPassScheduleProduceOneOutputPerFrame)
     pcl::io::savePCDFileBinary(path("in/f" + std::to_string(k) + ".pcd"), frame(20 + k));
   Result r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("t") + " --temporal-radius 1 --json");
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_NE(r.output.find("\"frames\": 4"), std::string::npos) << r.output;
+  const nlohmann::json summary = test::jsonLine(r.output);
+  EXPECT_EQ(summary["frames"], 4) << r.output;
+  // Each output carries its own bandwidths, also the frames that come out of the final flush.
+  ASSERT_EQ(summary["outputs"].size(), 4u);
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(summary["outputs"][k]["file"], "f" + std::to_string(k) + ".pcd");
+    EXPECT_GT(summary["outputs"][k]["similarity_bandwidth"].get<double>(), 0.0);
+  }
+  EXPECT_NE(summary["outputs"][2]["similarity_bandwidth"], summary["outputs"][3]["similarity_bandwidth"]);
   r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("p") +
               " --pass search=9,patch=5,radius=1 --pass search=5,patch=3,radius=0 --quiet");
   ASSERT_EQ(r.status, 0) << r.output;

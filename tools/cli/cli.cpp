@@ -175,33 +175,129 @@ fileName(const std::string& path)
   return fs::path(path).filename().string();
 }
 
-Progress::Progress(std::size_t total, bool quiet)
-    : total_(total), enabled_(!quiet && ::isatty(2)), start_(std::chrono::steady_clock::now())
+namespace
 {
+/// Share of a default filter iteration's time spent before each phase begins (range_nlm_bench
+/// --breakdown on a VGA frame), for the estimate within a frame.
+double
+stageStart(Stage stage)
+{
+  switch (stage) {
+  case Stage::neighbour_frames:
+  case Stage::bandwidths:
+    return 0.0;
+  case Stage::noise_maps:
+    return 0.06;
+  case Stage::presmoothing:
+    return 0.09;
+  case Stage::normals:
+    return 0.26;
+  case Stage::frame_terms:
+    return 0.58;
+  case Stage::offsets:
+    return 0.64;
+  case Stage::displacement:
+    return 0.98;
+  }
+  return 0.0;
+}
+
+std::string
+duration(double seconds)
+{
+  std::ostringstream s;
+  if (seconds < 90)
+    s << static_cast<long>(std::lround(seconds)) << " s";
+  else if (seconds < 5400)
+    s << static_cast<long>(std::lround(seconds / 60)) << " min";
+  else
+    s << std::fixed << std::setprecision(1) << seconds / 3600 << " h";
+  return s.str();
+}
+} // namespace
+
+Progress::Progress(std::string tool, std::size_t total, int iterations, bool enabled)
+    : tool_(std::move(tool)), total_(total), iterations_(std::max(1, iterations)), enabled_(enabled && total > 0),
+      terminal_(::isatty(2) != 0), start_(std::chrono::steady_clock::now())
+{
+  if (enabled_)
+    ticker_ = std::thread([this] { tick(); });
+}
+
+Progress::~Progress()
+{
+  finish();
 }
 
 void
 Progress::update(std::size_t done)
 {
-  if (!enabled_ || total_ == 0)
-    return;
-  const double seconds = millisecondsSince(start_) / 1000.0;
-  const double fps = seconds > 0 ? done / seconds : 0.0;
-  const double left = fps > 0 ? (total_ - done) / fps : 0.0;
-  const int width = 30;
-  const int filled = static_cast<int>(width * done / total_);
-  std::ostringstream line;
-  line << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] " << done << "/"
-       << total_ << "  " << std::fixed << std::setprecision(2) << fps << " frames/s  "
-       << std::setprecision(0) << left << " s left ";
-  std::cerr << line.str() << std::flush;
+  std::lock_guard<std::mutex> lock(mutex_);
+  done_ = done;
+  frame_fraction_ = 0.0;
+}
+
+void
+Progress::begin(Stage stage, int iteration)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  frame_fraction_ = std::min(0.999, (iteration + stageStart(stage)) / iterations_);
+}
+
+void
+Progress::end(Stage, int)
+{
+}
+
+std::string
+Progress::line() const
+{
+  const double elapsed = millisecondsSince(start_) / 1000.0;
+  const double done = std::min(static_cast<double>(total_), done_ + frame_fraction_);
+  std::ostringstream out;
+  out << tool_ << ": ";
+  if (total_ > 1)
+    out << done_ << "/" << total_ << " frames, ";
+  out << static_cast<int>(100.0 * done / total_) << " %, " << duration(elapsed) << " elapsed";
+  if (done > 0.0)
+    out << ", about " << duration(elapsed * (total_ - done) / done) << " left";
+  return out.str();
+}
+
+void
+Progress::tick()
+{
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!stop_) {
+    wake_.wait_for(lock, std::chrono::milliseconds(250));
+    if (stop_)
+      break;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - start_ < std::chrono::seconds(2))
+      continue;
+    if (shown_ && now - last_shown_ < std::chrono::seconds(terminal_ ? 1 : 10))
+      continue;
+    const std::string text = line();
+    std::cerr << (terminal_ ? "\r" + text + "\033[K" : text + "\n") << std::flush;
+    shown_ = true;
+    last_shown_ = now;
+  }
 }
 
 void
 Progress::finish()
 {
-  if (enabled_)
-    std::cerr << "\n";
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stop_)
+      return;
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (ticker_.joinable())
+    ticker_.join();
+  if (shown_ && terminal_)
+    std::cerr << "\n" << std::flush;
 }
 
 double

@@ -5,6 +5,7 @@
 
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/io/pcd_file.h>
+#include <range_nlm/core/pipeline.h>
 #include <range_nlm/parameters.h>
 
 #include <boost/program_options.hpp>
@@ -14,6 +15,9 @@
 #include <pcl/point_types.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -77,18 +81,46 @@ joinPath(const std::string& directory, const std::string& name);
 std::string
 fileName(const std::string& path);
 
-/// Progress of a long run: a bar on a terminal (stderr), nothing when quiet or not a terminal.
-class Progress
+/// Progress of a run on stderr with an estimate of the time left. Nothing is shown during the
+/// first two seconds (short runs stay silent); after that a line every second, rewritten in place
+/// on a terminal, or a line every ten seconds when stderr is a file or a pipe. A ticker thread
+/// keeps it going during a long frame. As a StageObserver of the filter it also counts the
+/// phases within a frame, so that a single slow frame gets an estimate too.
+class Progress : public StageObserver
 {
 public:
-  Progress(std::size_t total, bool quiet);
+  /// `total` frames, each of `iterations` filter iterations (for the within-frame estimate).
+  Progress(std::string tool, std::size_t total, int iterations, bool enabled);
+  ~Progress() override;
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  /// `done` frames are finished.
   void update(std::size_t done);
+  /// Stops the display and ends its line.
   void finish();
 
+  void begin(Stage stage, int iteration) override;
+  void end(Stage stage, int iteration) override;
+
 private:
+  void tick();
+  std::string line() const;
+
+  std::string tool_;
   std::size_t total_;
+  int iterations_;
   bool enabled_;
+  bool terminal_;
   std::chrono::steady_clock::time_point start_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  bool shown_ = false;
+  std::size_t done_ = 0;
+  double frame_fraction_ = 0.0;
+  std::chrono::steady_clock::time_point last_shown_;
+  std::thread ticker_;
 };
 
 /// Milliseconds since `start`.

@@ -4,6 +4,7 @@
 #include <range_nlm/temporal_stream.h>
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 #include <string>
 
@@ -24,9 +25,13 @@ template <typename PointT>
 typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
-  last_problems_.emplace_back();
+  last_outputs_.emplace_back();
   if (!wanted_[t - first_])
     return nullptr;
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&start] {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  };
   const std::size_t lo = t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0;
   const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
   std::deque<CloudConstPtr> frames;
@@ -47,13 +52,16 @@ TemporalStream<PointT>::filterAt(std::size_t t)
     *out = *window_[t - first_];
     last_weights_.clear();
     last_bandwidths_ = Bandwidths();
-    last_problems_.back() = e.what();
+    last_outputs_.back().problem = e.what();
+    last_outputs_.back().milliseconds = elapsed();
     return out;
   }
   // The window alone decides which frames stay in memory.
   filter_.clearFrames();
   last_weights_ = filter_.getFrameWeights();
   last_bandwidths_ = filter_.getFrameBandwidths()[t - std::max(lo, first_)];
+  last_outputs_.back().bandwidths = last_bandwidths_;
+  last_outputs_.back().milliseconds = elapsed();
   return out;
 }
 
@@ -87,7 +95,7 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
   }
   window_.push_back(frame);
   wanted_.push_back(wanted);
-  last_problems_.clear();
+  last_outputs_.clear();
   ++pushed_;
   std::vector<CloudPtr> ready;
   // Frame t is ready once t + r (causal: t) has been pushed.
@@ -105,7 +113,7 @@ template <typename PointT>
 std::vector<typename TemporalStream<PointT>::CloudPtr>
 TemporalStream<PointT>::flush()
 {
-  last_problems_.clear();
+  last_outputs_.clear();
   std::vector<CloudPtr> ready;
   while (emitted_ < pushed_) {
     ready.push_back(filterAt(emitted_));
