@@ -509,8 +509,7 @@ public:
           progress_.finish();
           throw;
         }
-        frame.unreadable = e.what();
-        std::cerr << "range_nlm_denoise: skipping a frame: " << e.what() << std::endl;
+        frame.unreadable = e.what(); // listed at the end
       }
       if (!frame.unreadable.empty() && summary_.width == 0) {
         pending_.push_back(std::move(frame)); // its stand-in needs the sequence's size
@@ -696,7 +695,7 @@ run(int argc, char** argv)
   if (!summary.unreadable.empty()) {
     std::cerr << "range_nlm_denoise: " << summary.unreadable.size() << " frame(s) could not be read and were skipped:\n";
     for (const auto& u : summary.unreadable)
-      std::cerr << "  " << u.first << ": " << u.second << "\n";
+      std::cerr << "  " << u.second << "\n"; // the message names the file
     std::cerr << std::flush;
     return 3;
   }

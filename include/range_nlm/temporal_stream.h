@@ -37,7 +37,9 @@ public:
   TemporalStream(int radius, bool causal, const FilterParameters& parameters);
 
   /// Adds the next frame; returns the frames that became ready (zero or one). Throws
-  /// std::invalid_argument if the frame's size differs from the first frame's.
+  /// std::invalid_argument, leaving the stream as it was (the frame can be skipped), if the
+  /// frame's size differs from the first frame's, its point count from width x height, or it
+  /// holds an infinite coordinate.
   /// With `wanted` false the frame is only a neighbour of the others: it is not filtered and its
   /// output is a null pointer (for resuming a run, or a pass of a schedule whose next pass reads
   /// only some frames). Such a frame may itself be null if no wanted frame's window holds it;

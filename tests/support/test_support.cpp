@@ -1,6 +1,10 @@
 #include "test_support.h"
 
+#include <fstream>
 #include <sstream>
+
+#include <fcntl.h>
+#include <unistd.h>
 #include <stdexcept>
 
 #include <pcl/common/centroid.h>
@@ -171,6 +175,32 @@ CommandResult
 runDenoise(const std::string& args)
 {
   return runTool("range_nlm_denoise", args);
+}
+
+int
+startProcess(const std::vector<std::string>& args, const std::string& log)
+{
+  std::vector<std::string> all = args;
+  std::vector<char*> argv;
+  for (std::string& a : all)
+    argv.push_back(&a[0]);
+  argv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    ::dup2(fd, 2);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+std::string
+readBytes(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
 nlohmann::json

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace range_nlm
 {
@@ -77,6 +78,15 @@ CommandResult
 runDenoise(const std::string& args);
 
 /// Adds NaN holes: each point becomes NaN with probability p.
+/// Starts `argv[0]` with the arguments `argv[1..]` in the background, its stdout and stderr into
+/// the file `log`; returns its pid (reap it with waitpid or wait4).
+int
+startProcess(const std::vector<std::string>& argv, const std::string& log);
+
+/// The whole contents of a file ("" if it cannot be read).
+std::string
+readBytes(const std::string& path);
+
 /// The JSON object a tool printed with --json: the first line of `output` that starts with '{',
 /// parsed (other lines are progress or messages on stderr). Throws if there is none or it does
 /// not parse.

@@ -50,26 +50,13 @@ startTool(const std::vector<std::string>& args, const std::string& log)
 {
   std::vector<std::string> all{kTool};
   all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all)
-    argv.push_back(&a[0]);
-  argv.push_back(nullptr);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(fd, 1);
-    ::dup2(fd, 2);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
+  return test::startProcess(all, log);
 }
 
 std::string
 readBytes(const fs::path& path)
 {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
+  return test::readBytes(path.string());
 }
 
 bool

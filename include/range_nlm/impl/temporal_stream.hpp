@@ -4,6 +4,7 @@
 #include <range_nlm/temporal_stream.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -83,6 +84,18 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
   if (!frame && wanted)
     throw std::invalid_argument("range_nlm: pushed frame is null");
   if (frame) {
+    // Refused before anything changes, so that the caller can skip the frame and go on.
+    if (frame->points.size() != static_cast<std::size_t>(frame->width) * frame->height)
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) + " holds " +
+                                  std::to_string(frame->points.size()) + " points but declares width x height = " +
+                                  std::to_string(frame->width) + " x " + std::to_string(frame->height));
+    for (std::size_t i = 0; i < frame->points.size(); ++i) {
+      const PointT& p = frame->points[i];
+      if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
+        throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) +
+                                    " has an infinite coordinate at pixel (" + std::to_string(i % frame->width) +
+                                    ", " + std::to_string(i / frame->width) + "); invalid points must be NaN");
+    }
     if (width_ == 0 && height_ == 0) {
       width_ = frame->width;
       height_ = frame->height;
