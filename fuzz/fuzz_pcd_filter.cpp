@@ -12,6 +12,16 @@
 //     valid points with valid neighbours to estimate the noise). Otherwise every finite input point must come out finite, every
 //     invalid input point (any coordinate NaN) must come out NaN in x, y and z.
 //
+//  3. as a 16-bit depth PNG: written to a temporary .png path and read with io::loadFrame. Again
+//     InputError naming the file is the only documented failure; a frame that loads is organized,
+//     its points finite or NaN in all three coordinates.
+//  4. as a sequence: decoded into a few small frames whose sizes and validity change from frame to
+//     frame (all-NaN frames, an infinity, another size), pushed through a TemporalStream with a
+//     random radius and mode. A refused push (std::invalid_argument) must be exactly a frame of
+//     another size or with an infinity, and leave the stream going; every accepted frame comes
+//     out once, in order, with the pixel rule above; a frame with nothing to filter comes out
+//     unchanged with its reason.
+//
 // A finding becomes a regression test: run the target on it with RANGE_NLM_FUZZ_RECIPE=FILE.pcd
 // set, and it writes the decoded cloud as an ascii PCD whose "# range_nlm recipe" comment line
 // holds the parameters; tests/test_bad_input.cpp filters every tests/data/fuzz-*.pcd that way and
@@ -20,6 +30,7 @@
 #include <range_nlm/io/pcd_file.h>
 
 #include <range_nlm/nonlocal_means_filter.h>
+#include <range_nlm/temporal_stream.h>
 
 #include <fuzzer/FuzzedDataProvider.h>
 #include <pcl/console/print.h>
@@ -203,6 +214,126 @@ filterAsRecipe(const std::uint8_t* data, std::size_t size)
       bug("invalid point " + std::to_string(i) + " did not come out NaN in x, y and z");
   }
 }
+void
+readAsDepthImage(const std::uint8_t* data, std::size_t size)
+{
+  static const std::string path =
+      (std::filesystem::temp_directory_path() / ("fuzz_depth_" + std::to_string(::getpid()) + ".png")).string();
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  }
+  try {
+    range_nlm::DepthIntrinsics intrinsics;
+    intrinsics.depth_scale = 1000.0;
+    const range_nlm::io::LoadedCloud loaded = range_nlm::io::loadFrame(path, intrinsics);
+    const pcl::PointCloud<pcl::PointXYZ> cloud = range_nlm::io::xyzFromBlob(loaded, path);
+    if (cloud.height < 2 || cloud.size() != std::size_t(cloud.width) * cloud.height)
+      bug("loadFrame accepted a depth image that is not an organized frame");
+    for (const pcl::PointXYZ& p : cloud) {
+      const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+      const bool nan = std::isnan(p.x) && std::isnan(p.y) && std::isnan(p.z);
+      if (!finite && !nan)
+        bug("a depth image gave a point that is neither finite nor all NaN");
+    }
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    if (message.empty() || message.find('\n') != std::string::npos || message.find(path) == std::string::npos)
+      bug("InputError message of a depth image is not one line naming the file: " + message);
+  }
+}
+
+void
+streamAsSequence(const std::uint8_t* data, std::size_t size)
+{
+  using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+  FuzzedDataProvider in(data, size);
+  const int radius = in.ConsumeIntegralInRange<int>(0, 2);
+  const bool causal = in.ConsumeBool();
+  range_nlm::FilterParameters p = range_nlm::FilterParameters::recommended();
+  p.search_window = 3;
+  p.patch_size = 3;
+  p.normal_window = 3;
+  p.normal_presmooth_window = 3;
+  p.iterations = 1;
+  p.threads = 1;
+  range_nlm::TemporalStream<pcl::PointXYZ> stream(radius, causal, p);
+  const int frames = in.ConsumeIntegralInRange<int>(1, 6);
+  int width = 0, height = 0, accepted = 0, emitted = 0;
+  std::vector<Cloud::ConstPtr> inputs; // accepted frames, in order
+  auto check = [&](const std::vector<Cloud::Ptr>& ready) {
+    if (stream.lastOutputs().size() != ready.size())
+      bug("lastOutputs() does not match the frames returned");
+    for (std::size_t r = 0; r < ready.size(); ++r, ++emitted) {
+      const Cloud& a = *inputs.at(static_cast<std::size_t>(emitted));
+      const Cloud& b = *ready[r];
+      if (b.width != a.width || b.height != a.height)
+        bug("a streamed frame came out with another size");
+      const bool passed_through = !stream.lastOutputs()[r].problem.empty();
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        const bool valid_in = std::isfinite(a[i].x) && std::isfinite(a[i].y) && std::isfinite(a[i].z);
+        const bool finite_out = std::isfinite(b[i].x) && std::isfinite(b[i].y) && std::isfinite(b[i].z);
+        if (valid_in != finite_out || (!valid_in && !(std::isnan(b[i].x) && std::isnan(b[i].y) && std::isnan(b[i].z))))
+          bug("a streamed frame broke the NaN-in, NaN-out rule at point " + std::to_string(i));
+        if (passed_through && valid_in && (a[i].x != b[i].x || a[i].y != b[i].y || a[i].z != b[i].z))
+          bug("a frame passed through was changed");
+      }
+    }
+  };
+  for (int k = 0; k < frames; ++k) {
+    const int w = in.ConsumeIntegralInRange<int>(3, 12);
+    const int h = in.ConsumeIntegralInRange<int>(3, 12);
+    const int mode = in.ConsumeIntegralInRange<int>(0, 5); // 0 all NaN, 1 an infinity, else ordinary
+    Cloud::Ptr cloud(new Cloud(w, h));
+    bool has_inf = false;
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const float z = 1.0f + 0.01f * u + 0.02f * (in.ConsumeIntegral<std::uint8_t>() / 255.0f);
+        pcl::PointXYZ& q = (*cloud)[std::size_t(v) * w + u];
+        q = pcl::PointXYZ((u - 0.5f * w) * z / 100.0f, (v - 0.5f * h) * z / 100.0f, z);
+        if (mode == 0 || in.ConsumeIntegralInRange<int>(0, 15) == 0)
+          q.x = q.y = q.z = std::numeric_limits<float>::quiet_NaN();
+      }
+    if (mode == 1) {
+      (*cloud)[0].z = std::numeric_limits<float>::infinity();
+      has_inf = true;
+    }
+    cloud->is_dense = false;
+    const bool other_size = accepted > 0 && (w != width || h != height);
+    std::vector<Cloud::Ptr> ready;
+    try {
+      ready = stream.push(cloud);
+    } catch (const range_nlm::UnfilterableFrame& e) {
+      bug(std::string("TemporalStream let an UnfilterableFrame out: ") + e.what());
+    } catch (const std::invalid_argument& e) {
+      const std::string message = e.what();
+      // The window of a few pixels may also be too small for the parameters: a documented refusal
+      // of the whole stream.
+      if (message.find("larger than the cloud") != std::string::npos)
+        return;
+      if (!other_size && !has_inf)
+        bug("TemporalStream refused a frame of the sequence's size without an infinity: " + message);
+      continue;
+    }
+    if (other_size || has_inf)
+      bug("TemporalStream accepted a frame of another size or with an infinity");
+    if (accepted == 0)
+      width = w, height = h;
+    ++accepted;
+    inputs.push_back(cloud);
+    check(ready);
+  }
+  try {
+    check(stream.flush());
+  } catch (const std::invalid_argument& e) {
+    if (std::string(e.what()).find("larger than the cloud") == std::string::npos)
+      bug(std::string("flush threw: ") + e.what());
+    return;
+  }
+  if (emitted != accepted)
+    bug("TemporalStream did not give one output per accepted frame");
+}
+
 } // namespace
 
 extern "C" int
@@ -217,5 +348,7 @@ LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
 {
   readAsFile(data, size);
   filterAsRecipe(data, size);
+  readAsDepthImage(data, size);
+  streamAsSequence(data, size);
   return 0;
 }
