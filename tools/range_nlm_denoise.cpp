@@ -57,6 +57,8 @@ struct Pass
   FilterParameters parameters;
   int radius = 0;
   bool causal = false;
+  /// Neighbours are the last `radius` filtered outputs (TemporalWindow::recursive).
+  bool recursive = false;
 };
 
 Pass
@@ -114,6 +116,9 @@ struct PendingFrame
   /// Why the frame could not be read (--keep-going: an all-NaN stand-in was pushed in its place,
   /// so that its neighbours' windows stay as they are; nothing is written for it).
   std::string unreadable;
+  /// --resume: its output is complete already (a recursive pass still filters it, for the
+  /// history of the frames after it, but it is not written again).
+  bool finished = false;
 };
 
 struct FrameReport
@@ -130,6 +135,11 @@ std::vector<bool>
 framesRead(const Pass& pass, const std::vector<bool>& needed)
 {
   std::vector<bool> read(needed.size(), false);
+  if (pass.recursive && pass.radius > 0) { // every output carries the history before it
+    const auto last = std::find(needed.rbegin(), needed.rend(), true);
+    std::fill(read.begin(), read.begin() + (needed.rend() - last), true);
+    return read;
+  }
   const std::size_t r = static_cast<std::size_t>(pass.radius);
   for (std::size_t t = 0; t < needed.size(); ++t)
     if (needed[t])
@@ -161,7 +171,10 @@ public:
     }
     inputs_read_ = next;
     for (std::size_t level = 0; level < passes.size(); ++level) {
-      levels_.push_back({std::make_unique<TemporalStream<pcl::PointXYZ>>(passes[level].radius, passes[level].causal,
+      const TemporalWindow window = passes[level].recursive ? TemporalWindow::recursive
+                                    : passes[level].causal  ? TemporalWindow::causal
+                                                            : TemporalWindow::centred;
+      levels_.push_back({std::make_unique<TemporalStream<pcl::PointXYZ>>(passes[level].radius, window,
                                                                           passes[level].parameters),
                          needed[level], 0, {}});
       levels_.back().stream->setStageObserver(observer);
@@ -382,6 +395,8 @@ addOptions(po::options_description& options)
     ("output-dir", po::value<std::string>(), "directory for the filtered frames (same file names)")
     ("temporal-radius", po::value<int>()->default_value(0), "R: frames on each side used by the temporal filter (0 = static)")
     ("causal", "temporal window uses only past frames (no output delay)")
+    ("recursive", "temporal neighbours are the last R filtered outputs: no output delay, the whole history carried "
+                  "along at the cost of R frames (implies --causal)")
     ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
     ("overwrite", "allow the output to be the input (file or directory)")
     ("resume", "skip frames whose output already exists and is a complete frame of the input's size "
@@ -412,7 +427,8 @@ jobFrom(const po::variables_map& vm)
   Pass base;
   base.parameters = filterParametersFrom(vm);
   base.radius = vm["temporal-radius"].as<int>();
-  base.causal = vm.count("causal") > 0;
+  base.recursive = vm.count("recursive") > 0;
+  base.causal = vm.count("causal") > 0 || base.recursive;
   if (base.radius < 0)
     throw UsageError("--temporal-radius must be >= 0, got " + std::to_string(base.radius));
   if (vm.count("pass"))
@@ -492,11 +508,11 @@ public:
     std::size_t deferred = 0; // unreadable frames before the sequence's size is known
     for (std::size_t f = 0; f < job_.inputs.size(); ++f) {
       if (!chain.inputRead(f)) { // finished, and no frame still to filter reads it
-        pending_.push_back(PendingFrame{LoadedCloud(), job_.inputs[f], job_.outputs[f], ""});
+        pending_.push_back(PendingFrame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", true});
         finish(filtered([&] { return chain.push(nullptr); }));
         continue;
       }
-      PendingFrame frame{LoadedCloud(), job_.inputs[f], job_.outputs[f], ""};
+      PendingFrame frame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", !wanted_[f]};
       Cloud::Ptr xyz;
       try {
         frame.loaded = loadFrame(job_.inputs[f], job_.intrinsics);
@@ -604,7 +620,7 @@ private:
       const std::string name = fileName(frame.output_path);
       if (!frame.unreadable.empty()) {
         summary_.unreadable.emplace_back(fileName(frame.input_path), frame.unreadable);
-      } else if (!result.cloud) { // --resume: finished before
+      } else if (!result.cloud || frame.finished) { // --resume: finished before
         ++summary_.skipped;
         if (!job_.quiet && !job_.json)
           std::cout << name << ": skipped (complete output exists)" << std::endl;

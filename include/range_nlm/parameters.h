@@ -34,6 +34,22 @@ enum class Evaluation
   direct
 };
 
+/// Similarity bandwidth of the other frames' patches in the temporal filter.
+enum class CrossFrameBandwidth
+{
+  /// Each frame's own s (its spatial noise estimate), as for the current frame (the paper).
+  spatial,
+  /// The frame's spatial noise raised by its frame-to-frame noise ratio (estimateTemporalNoiseRatio,
+  /// from the differences to the current frame at the same pixel, along the normal) where that
+  /// is larger; d grows to span the frame-to-frame distance of one surface point too. Under
+  /// spatially correlated noise a frame looks locally smoother than it is, so its spatial s is
+  /// too small for the frame-to-frame differences of a static scene, and the paper's weights
+  /// reject the other frames' patches as if they had moved. Patches that really moved still
+  /// differ by many times that noise; with noise independent from pixel to pixel the ratio is
+  /// about 1 and nothing changes.
+  temporal
+};
+
 /// Direction along which a point is moved by the filtered normal offset h_i.
 enum class Displacement
 {
@@ -68,7 +84,7 @@ struct FilterParameters
   /// OpenMP threads; 0 = as many as OpenMP offers. Output does not depend on it. >= 0, default 0.
   int threads = 0;
   /// d: distance bandwidth of Phi_d = exp(-|p_i - p_j|^2 / d^2), cloud units (e.g. metres).
-  /// 0 = automatic (d = distance_scale * mu_d, see bandwidth.h). >= 0, default automatic.
+  /// 0 = automatic (d = distance_scale * mu_d, see estimateBandwidths in core/pipeline.h). >= 0, default automatic.
   float distance_bandwidth = automatic;
   /// s: similarity bandwidth of Phi_s = exp(-Sim / s^2), cloud units.
   /// 0 = automatic (s = similarity_scale * sigma_s). >= 0, default automatic.
@@ -107,6 +123,9 @@ struct FilterParameters
   float max_displacement = 0.0f;
   /// Direction of the displacement; see Displacement.
   Displacement displacement = Displacement::normal;
+  /// Similarity bandwidth of the other frames' patches (temporal filter, range-adaptive model
+  /// with automatic s); see CrossFrameBandwidth. Default temporal (paper: spatial).
+  CrossFrameBandwidth cross_frame_bandwidth = CrossFrameBandwidth::temporal;
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;
 

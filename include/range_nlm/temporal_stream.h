@@ -16,6 +16,21 @@
 namespace range_nlm
 {
 
+/// Which frames are the temporal neighbours of frame t.
+enum class TemporalWindow
+{
+  /// t - r .. t + r (clipped at the sequence's ends): output lags input by r frames.
+  centred,
+  /// t - r .. t: no output delay.
+  causal,
+  /// The last r filtered outputs and frame t: no output delay, and the history of the whole
+  /// sequence carried along, like an exponential moving average that is motion- and edge-aware
+  /// (a patch that moved is not similar, so it gets no weight). Memory and time per frame do
+  /// not grow with the sequence. Every frame is filtered (`wanted` of push() is ignored), since
+  /// each output is the next frame's neighbour.
+  recursive
+};
+
 /// Push frames one by one; each filtered frame comes out once its window is complete.
 /// A frame that cannot be filtered (UnfilterableFrame: all NaN, or too few valid points for the
 /// noise estimate, e.g. a covered lens) comes out unchanged, NaN where it was NaN, and the stream
@@ -34,7 +49,12 @@ public:
   using CloudPtr = typename PointCloud::Ptr;
 
   /// Throws std::invalid_argument for a negative radius or invalid parameters.
-  TemporalStream(int radius, bool causal, const FilterParameters& parameters);
+  TemporalStream(int radius, TemporalWindow window, const FilterParameters& parameters);
+  /// The same with `causal` choosing TemporalWindow::causal over TemporalWindow::centred.
+  TemporalStream(int radius, bool causal, const FilterParameters& parameters)
+      : TemporalStream(radius, causal ? TemporalWindow::causal : TemporalWindow::centred, parameters)
+  {
+  }
 
   /// Adds the next frame; returns the frames that became ready (zero or one). Throws
   /// std::invalid_argument, leaving the stream as it was (the frame can be skipped), if the
@@ -48,8 +68,8 @@ public:
   /// Filters the frames still waiting for future neighbours, with the windows clipped at the end.
   std::vector<CloudPtr> flush();
 
-  /// Frames currently held in memory.
-  std::size_t heldFrames() const { return window_.size(); }
+  /// Frames currently held in memory (input frames and, in recursive mode, past outputs).
+  std::size_t heldFrames() const { return window_.size() + history_.size(); }
   /// Psi_k of the last frame produced.
   const std::vector<float>& lastFrameWeights() const { return last_weights_; }
   /// Bandwidths of the current frame of the last frame produced.
@@ -75,6 +95,8 @@ private:
 
   int radius_;
   bool causal_;
+  bool recursive_ = false;
+  std::deque<CloudConstPtr> history_; // recursive mode: the last radius_ outputs, oldest first
   FilterParameters parameters_;
   std::deque<CloudConstPtr> window_; // frames first_ .. first_ + size - 1
   std::deque<bool> wanted_;          // whether each frame of window_ is to be filtered
@@ -90,6 +112,11 @@ private:
 };
 
 /// Batch form: filters a whole sequence with the same windows as TemporalStream.
+template <typename PointT>
+std::vector<typename pcl::PointCloud<PointT>::Ptr>
+filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& frames, int radius,
+               TemporalWindow window, const FilterParameters& parameters);
+/// The same with `causal` choosing TemporalWindow::causal over TemporalWindow::centred.
 template <typename PointT>
 std::vector<typename pcl::PointCloud<PointT>::Ptr>
 filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& frames, int radius,

@@ -241,4 +241,27 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
   return profile;
 }
 
+float
+estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
+                           const Viewpoint& viewpoint)
+{
+  if (a.size() != b.size() || normals_a.size() != a.size() || profile_b.empty())
+    return 0.0f;
+  std::vector<float> ratios;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!a.valid[i] || !b.valid[i] || !std::isfinite(normals_a.nx[i]))
+      continue;
+    const float dx = a.x[i] - viewpoint[0], dy = a.y[i] - viewpoint[1], dz = a.z[i] - viewpoint[2];
+    const float sigma = profile_b.sigmaAt(std::sqrt(dx * dx + dy * dy + dz * dz));
+    if (!(sigma > 0.0f))
+      continue;
+    const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
+                        (b.z[i] - a.z[i]) * normals_a.nz[i];
+    ratios.push_back(std::fabs(along) / sigma);
+  }
+  if (ratios.size() < 64)
+    return 0.0f;
+  return 1.4826f * 0.70710678f * medianOf(std::move(ratios));
+}
+
 } // namespace range_nlm

@@ -90,6 +90,7 @@ FilterParameters::paper()
   p.bandwidth_model = BandwidthModel::global;
   p.max_displacement = 0.0f;
   p.displacement = Displacement::normal;
+  p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
   return p;
 }
 

@@ -441,19 +441,30 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       FrameTerm term{k == center ? &current : frames[k], bandwidths[k].distance, bandwidths[k].similarity, weights[k]};
       if (adaptive) {
         // Per-point bandwidths from frame k's profile at the centre point's range; a bandwidth
-        // given by the user stays global.
+        // given by the user stays global. Another frame's noise is its spatial noise, raised to
+        // its frame-to-frame noise where that is larger (spatially correlated noise): its
+        // patches then get s from that noise, and its points a d that also spans the distance
+        // two samples of one surface point have from frame to frame (2 s^2 more in d^2).
+        const float ratio =
+            k != center && parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal
+                ? std::max(1.0f, estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k], viewpoint))
+                : 1.0f;
+        const bool cross = ratio > 1.0f;
         if (!(parameters.distance_bandwidth > 0.0f)) {
           inverse_d2[k].resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
-          for (std::size_t i = 0; i < n; ++i)
-            inverse_d2[k][i] = detail::inverseSquare(parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i]);
+          for (std::size_t i = 0; i < n; ++i) {
+            const float d = parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i];
+            const float s = parameters.similarity_scale * ratio * profiles[k].sigmaAt(rho[i]);
+            inverse_d2[k][i] = detail::inverseSquare(cross ? std::sqrt(d * d + 2.0f * s * s) : d);
+          }
           term.inverse_distance2 = &inverse_d2[k];
         }
         if (!(parameters.similarity_bandwidth > 0.0f)) {
           inverse_s2[k].resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
           for (std::size_t i = 0; i < n; ++i)
-            inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * profiles[k].sigmaAt(rho[i]));
+            inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * ratio * profiles[k].sigmaAt(rho[i]));
           term.inverse_similarity2 = &inverse_s2[k];
         }
       }

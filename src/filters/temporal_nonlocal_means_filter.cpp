@@ -19,7 +19,9 @@ template class range_nlm::TemporalStream<pcl::PointXYZRGBNormal>;
 
 #define RANGE_NLM_INSTANTIATE_FILTER_SEQUENCE(T)                                                  \
   template std::vector<pcl::PointCloud<T>::Ptr> filterSequence<T>(                  \
-      const std::vector<pcl::PointCloud<T>::ConstPtr>&, int, bool, const FilterParameters&);
+      const std::vector<pcl::PointCloud<T>::ConstPtr>&, int, bool, const FilterParameters&);            \
+  template std::vector<pcl::PointCloud<T>::Ptr> filterSequence<T>(                                  \
+      const std::vector<pcl::PointCloud<T>::ConstPtr>&, int, TemporalWindow, const FilterParameters&);
 namespace range_nlm
 {
 RANGE_NLM_INSTANTIATE_FILTER_SEQUENCE(pcl::PointXYZ)

@@ -86,6 +86,18 @@ NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint);
 
+/// How much larger the frame-to-frame noise of frame `b` is than its spatial noise profile says:
+/// 1.4826 x the median, over the pixels valid in both frames with a normal, of
+/// |(p_b - p_a) . n_a| / profile_b.sigmaAt(rho_a), divided by sqrt(2) (the difference holds the
+/// noise of both frames). The difference is taken along the normal, as the patch similarity
+/// takes it. About 1 for noise independent from pixel to pixel; larger where the noise is
+/// spatially correlated, which a local plane fit mostly mistakes for surface. One ratio for the
+/// frame, so a moving object that fills a range interval does not move it. 0 if fewer than 64
+/// pixels qualify or the profile is empty.
+float
+estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
+                           const Viewpoint& viewpoint);
+
 /// One frame of the (temporal) neighbourhood: its points, bandwidths and frame weight
 /// Psi_k = Psi_dk * Psi_sk. The static filter is the case of one frame with weight 1.
 /// Per-point bandwidths (range_adaptive) are given as maps of 1 / d^2 and 1 / s^2 indexed by

@@ -13,8 +13,9 @@ namespace range_nlm
 {
 
 template <typename PointT>
-TemporalStream<PointT>::TemporalStream(int radius, bool causal, const FilterParameters& parameters)
-    : radius_(radius), causal_(causal), parameters_(parameters)
+TemporalStream<PointT>::TemporalStream(int radius, TemporalWindow window, const FilterParameters& parameters)
+    : radius_(radius), causal_(window != TemporalWindow::centred), recursive_(window == TemporalWindow::recursive),
+      parameters_(parameters)
 {
   if (radius < 0)
     throw std::invalid_argument("range_nlm: temporal radius " + std::to_string(radius) +
@@ -27,7 +28,7 @@ typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
   last_outputs_.emplace_back();
-  if (!wanted_[t - first_])
+  if (!wanted_[t - first_] && !recursive_)
     return nullptr;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] {
@@ -36,14 +37,32 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   const std::size_t lo = t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0;
   const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
   std::deque<CloudConstPtr> frames;
-  for (std::size_t k = std::max(lo, first_); k <= hi; ++k) {
-    if (!window_[k - first_])
-      throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null but frame " +
-                                  std::to_string(t) + " is to be filtered with it");
-    frames.push_back(window_[k - first_]);
+  std::size_t current = 0;
+  if (recursive_) {
+    if (!window_[t - first_])
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(t) + " is null (recursive mode filters every frame)");
+    frames = history_;
+    current = frames.size();
+    frames.push_back(window_[t - first_]);
+  } else {
+    for (std::size_t k = std::max(lo, first_); k <= hi; ++k) {
+      if (!window_[k - first_])
+        throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null but frame " +
+                                    std::to_string(t) + " is to be filtered with it");
+      frames.push_back(window_[k - first_]);
+    }
+    current = t - std::max(lo, first_);
   }
+  // In recursive mode each output is a neighbour of the next frames.
+  auto remember = [this](const CloudPtr& out) {
+    if (!recursive_ || radius_ == 0)
+      return;
+    history_.push_back(out);
+    while (history_.size() > static_cast<std::size_t>(radius_))
+      history_.pop_front();
+  };
   filter_.setParameters(parameters_);
-  filter_.setFrames(frames, t - std::max(lo, first_));
+  filter_.setFrames(frames, current);
   CloudPtr out(new PointCloud);
   try {
     filter_.filter(*out);
@@ -55,14 +74,16 @@ TemporalStream<PointT>::filterAt(std::size_t t)
     last_bandwidths_ = Bandwidths();
     last_outputs_.back().problem = e.what();
     last_outputs_.back().milliseconds = elapsed();
+    remember(out);
     return out;
   }
   // The window alone decides which frames stay in memory.
   filter_.clearFrames();
   last_weights_ = filter_.getFrameWeights();
-  last_bandwidths_ = filter_.getFrameBandwidths()[t - std::max(lo, first_)];
+  last_bandwidths_ = filter_.getFrameBandwidths()[current];
   last_outputs_.back().bandwidths = last_bandwidths_;
   last_outputs_.back().milliseconds = elapsed();
+  remember(out);
   return out;
 }
 
@@ -116,7 +137,8 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
   while (emitted_ + lag < pushed_) {
     ready.push_back(filterAt(emitted_));
     ++emitted_;
-    const std::size_t keep_from = emitted_ >= static_cast<std::size_t>(radius_) ? emitted_ - radius_ : 0;
+    const std::size_t keep_from =
+        recursive_ ? emitted_ : emitted_ >= static_cast<std::size_t>(radius_) ? emitted_ - radius_ : 0;
     dropBefore(keep_from);
   }
   return ready;
@@ -131,11 +153,13 @@ TemporalStream<PointT>::flush()
   while (emitted_ < pushed_) {
     ready.push_back(filterAt(emitted_));
     ++emitted_;
-    const std::size_t keep_from = emitted_ >= static_cast<std::size_t>(radius_) ? emitted_ - radius_ : 0;
+    const std::size_t keep_from =
+        recursive_ ? emitted_ : emitted_ >= static_cast<std::size_t>(radius_) ? emitted_ - radius_ : 0;
     dropBefore(keep_from);
   }
   window_.clear();
   wanted_.clear();
+  history_.clear();
   first_ = pushed_;
   return ready;
 }
@@ -145,7 +169,16 @@ std::vector<typename pcl::PointCloud<PointT>::Ptr>
 filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& frames, int radius,
                bool causal, const FilterParameters& parameters)
 {
-  TemporalStream<PointT> stream(radius, causal, parameters);
+  return filterSequence<PointT>(frames, radius, causal ? TemporalWindow::causal : TemporalWindow::centred,
+                                parameters);
+}
+
+template <typename PointT>
+std::vector<typename pcl::PointCloud<PointT>::Ptr>
+filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& frames, int radius,
+               TemporalWindow window, const FilterParameters& parameters)
+{
+  TemporalStream<PointT> stream(radius, window, parameters);
   std::vector<typename pcl::PointCloud<PointT>::Ptr> out;
   for (const auto& frame : frames)
     for (auto& f : stream.push(frame))
