@@ -3,10 +3,16 @@
 #include <range_nlm/evaluation.h>
 #include <range_nlm/synthetic_scene.h>
 
+#include "test_support.h"
+
+#include <pcl/io/pcd_io.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <map>
@@ -654,4 +660,46 @@ TEST(Evaluation, JitterOfAStaticSequenceIsItsPerFrameNoise)
   JitterEvaluator mismatched;
   mismatched.add(base);
   EXPECT_THROW(mismatched.add(Cloud(width, height + 1)), std::invalid_argument);
+}
+
+TEST(Evaluation, ToolScoresRealFramesWithoutGroundTruth)
+{
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("range_nlm_eval_real_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "sequence");
+  const int width = 80, height = 60;
+  const Cloud raw = rayCloud(width, height, [](int u, int) { return u < 40 ? 1.0 : 1.3; });
+  Cloud bled = rayCloud(width, height, [](int u, int) { return u < 38 ? 1.0 : u < 40 ? 1.1 : u < 42 ? 1.2 : 1.3; });
+  for (int k = 0; k < 5; ++k)
+    bled.at(10 + k, 10).x = bled.at(10 + k, 10).y = bled.at(10 + k, 10).z = kNaN;
+  ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "raw.pcd").string(), raw), 0);
+  ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "bled.pcd").string(), bled), 0);
+  for (int k = 0; k < 3; ++k)
+    ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "sequence" / ("f" + std::to_string(k) + ".pcd")).string(),
+                                         k == 1 ? bled : raw),
+              0);
+
+  test::CommandResult r = test::runTool("range_nlm_eval", "--raw " + (dir / "raw.pcd").string() + " " +
+                                                              (dir / "bled.pcd").string() + " --min-region 500 --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  // The raw frame first (no residual), then the bled one.
+  EXPECT_NE(r.output.find("\"border_pixels\": 360, \"points_lost\": 0}"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"border_rms_mm\": 81.6"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"points_lost\": 5}"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"regions\": 2"), std::string::npos) << r.output;
+
+  r = test::runTool("range_nlm_eval", "--jitter " + (dir / "sequence").string() + " --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  // Pixels valid in all three frames; only the four bled columns move (by 10 cm twice).
+  EXPECT_NE(r.output.find("\"frames\": 3, \"pixels\": 4795"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"median_jitter_mm\": 0}"), std::string::npos) << r.output;
+
+  r = test::runTool("range_nlm_eval", "--raw " + (dir / "raw.pcd").string() + " --border-band -1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("border_band = -1"), std::string::npos) << r.output;
+  r = test::runTool("range_nlm_eval", "--raw " + (dir / "raw.pcd").string() + " " + (dir / "none.pcd").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("none.pcd"), std::string::npos) << r.output;
+  fs::remove_all(dir);
 }

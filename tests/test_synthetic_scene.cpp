@@ -2,12 +2,18 @@
 // dropouts and motion.
 #include <range_nlm/synthetic_scene.h>
 
+#include "test_support.h"
+
+#include <pcl/io/pcd_io.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -804,4 +810,29 @@ TEST(SyntheticScene, SensorModelOptionsAreValidatedByName)
   EXPECT_EQ(noiseModelFromString("kinect1"), NoiseModel::kinect1);
   EXPECT_EQ(noiseModelFromString("tof"), NoiseModel::tof);
   EXPECT_EQ(toString(NoiseModel::kinect1), "kinect1");
+}
+
+TEST(SyntheticScene, ToolTakesTheSensorModelOptionsAndNamesABadValue)
+{
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("range_nlm_synth_sensor_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  test::CommandResult r =
+      test::runTool("range_nlm_synth", "--output-dir " + dir.string() +
+                                           " --scene plane --width 64 --height 48 --noise stereo --stereo-subpixel 0.25 -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  pcl::PointCloud<pcl::PointXYZ> noisy;
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "noisy" / "frame_0000.pcd").string(), noisy), 0);
+  SceneOptions o = planeOptions(1.5, NoiseModel::stereo);
+  o.width = 64;
+  o.height = 48;
+  o.stereo_subpixel = 0.25;
+  EXPECT_TRUE(identical(noisy, renderFrame(o).noisy)) << "the tool writes the library's frame";
+  r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --noise kinect1 --kinect1-block 8");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("kinect1_block = 8"), std::string::npos) << r.output;
+  r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --noise tof --tof-mixed-probability 2");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("tof_mixed_probability = 2"), std::string::npos) << r.output;
+  fs::remove_all(dir);
 }
