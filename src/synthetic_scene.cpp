@@ -604,13 +604,15 @@ applyKinect1(const SensorInput& in, std::mt19937_64& rng, pcl::PointCloud<pcl::P
   const int width = o.width, height = o.height;
   const double fb = o.fx * o.kinect1_baseline;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> disparity(std::size_t(width) * height, nan);
+  std::vector<double> disparity;
+  disparity.assign(std::size_t(width) * height, nan);
   for (std::size_t i = 0; i < disparity.size(); ++i)
     if (in.shape_index[i] >= 0)
       disparity[i] = fb / in.depth[i];
 
   // Bilinear samples at shifted positions; NaN if a corner is outside the image or has no surface.
-  std::vector<double> shifted(disparity.size(), nan);
+  std::vector<double> shifted;
+  shifted.assign(disparity.size(), nan);
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) {
       const double x = u + o.kinect1_shift_sigma * gaussian(rng);

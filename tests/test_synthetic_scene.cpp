@@ -836,3 +836,29 @@ TEST(SyntheticScene, ToolTakesTheSensorModelOptionsAndNamesABadValue)
   EXPECT_NE(r.output.find("tof_mixed_probability = 2"), std::string::npos) << r.output;
   fs::remove_all(dir);
 }
+
+TEST(SyntheticScene, SensorModelsAreReproducibleFromTheSeedAndFreshPerFrame)
+{
+  for (NoiseModel model : {NoiseModel::stereo, NoiseModel::kinect1, NoiseModel::tof}) {
+    SceneOptions o;
+    o.width = 160;
+    o.height = 120;
+    o.fx = o.fy = 131.25;
+    o.noise = model;
+    o.seed = 3;
+    o.frames = 2;
+    const auto sequence = renderSequence(o);
+    EXPECT_TRUE(identical(renderFrame(o, 1).noisy, sequence[1].noisy)) << toString(model);
+    EXPECT_FALSE(identical(sequence[0].noisy, sequence[1].noisy)) << toString(model);
+    o.seed = 4;
+    EXPECT_FALSE(identical(renderFrame(o, 1).noisy, sequence[1].noisy)) << toString(model);
+    // Dropouts apply to the sensor models too.
+    o.dropout = 0.5;
+    std::size_t valid_before = 0, valid_after = 0;
+    for (const auto& p : sequence[1].noisy)
+      valid_before += valid(p);
+    for (const auto& p : renderFrame(o, 1).noisy)
+      valid_after += valid(p);
+    EXPECT_NEAR(double(valid_after), 0.5 * double(valid_before), 0.05 * double(valid_before)) << toString(model);
+  }
+}
