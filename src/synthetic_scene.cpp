@@ -861,7 +861,10 @@ SceneOptions::effectiveNoiseScale() const
 {
   if (noise_scale)
     return *noise_scale;
-  return (noise == NoiseModel::laser || noise == NoiseModel::stripes) ? 0.25 : 1.0;
+  return (noise == NoiseModel::kinect || noise == NoiseModel::stereo || noise == NoiseModel::kinect1 ||
+          noise == NoiseModel::tof)
+             ? 1.0
+             : 0.25;
 }
 
 void
