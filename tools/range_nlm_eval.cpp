@@ -6,12 +6,14 @@
 #include <range_nlm/eval/metrics.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 namespace fs = std::filesystem;
 namespace po = boost::program_options;
@@ -30,7 +32,37 @@ const char* const kUsage =
     "5x5 least-squares fit) in flat regions and within 3 px of depth discontinuities and\n"
     "creases, points lost (valid in NOISY, NaN in RESULT), and for sequences the mean per-pixel\n"
     "temporal standard deviation of static pixels and the RMSE near moving edges. With --input\n"
-    "the noisy frames are scored too, as the baseline.";
+    "the noisy frames are scored too, as the baseline.\n"
+    "\n"
+    "Real frames, without ground truth:\n"
+    "  range_nlm_eval --raw RAW [RESULT ...] [--min-region N] [--border-band K] [--json]\n"
+    "Finds large planar regions in the raw frame RAW and prints for RAW (the baseline) and each\n"
+    "RESULT (a filtered copy of RAW) the RMS residual (mm) to each region's plane fitted on RAW, in\n"
+    "the regions' interior and in a band of K px along their borders (bleeding), and the region\n"
+    "points lost (valid in RAW, NaN in RESULT).\n"
+    "  range_nlm_eval --jitter SEQ [SEQ ...] [--json]\n"
+    "For each directory SEQ of frames of a static scene: mean and median over the pixels valid in\n"
+    "every frame of the per-pixel standard deviation (mm) of the range over the frames.\n"
+    "Frames are PCD files or 16-bit depth PNGs (see the depth PNG options).";
+
+/// A JSON string literal.
+std::string
+jsonQuote(const std::string& text)
+{
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\')
+      out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      char buffer[8];
+      std::snprintf(buffer, sizeof buffer, "\\u%04x", unsigned(static_cast<unsigned char>(c)));
+      out += buffer;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
 
 /// The frames named by a path: the file itself, or the sorted *.pcd files of a directory.
 std::vector<std::string>
@@ -131,9 +163,127 @@ secondaryLine(const char* what, double value, std::size_t pixels, const char* pi
   return s.str();
 }
 
+/// One real frame (PCD or depth PNG) as x, y, z.
+pcl::PointCloud<pcl::PointXYZ>
+loadRealFrame(const std::string& path, const DepthIntrinsics& intrinsics)
+{
+  return xyzFromBlob(loadFrame(path, intrinsics), path);
+}
+
+std::string
+millimetres(double metres)
+{
+  std::ostringstream s;
+  if (std::isfinite(metres))
+    s << std::fixed << std::setprecision(3) << metres * 1000.0;
+  else
+    s << "-";
+  return s.str();
+}
+
+/// --raw: residuals to the planes of the raw frame, for the raw frame and each result.
+int
+runPlanar(const po::variables_map& vm, const std::vector<std::string>& results, bool json)
+{
+  PlanarRegionOptions options;
+  options.min_region_pixels = vm["min-region"].as<int>();
+  options.border_band = vm["border-band"].as<int>();
+  options.block_size = vm["block-size"].as<int>();
+  options.plane_distance = vm["plane-distance"].as<double>();
+  try {
+    options.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
+  const std::string raw_path = vm["raw"].as<std::string>();
+  const pcl::PointCloud<pcl::PointXYZ> raw = loadRealFrame(raw_path, intrinsics);
+  PlanarRegions regions;
+  try {
+    regions = findPlanarRegions(raw, options);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("'" + raw_path + "': " + e.what());
+  }
+  std::vector<std::string> names{raw_path};
+  std::vector<PlanarResidual> residuals{planarResidual(regions, raw)};
+  for (const std::string& path : results) {
+    const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics);
+    try {
+      residuals.push_back(planarResidual(regions, frame));
+    } catch (const std::invalid_argument& e) {
+      throw InputError("'" + path + "': " + e.what());
+    }
+    names.push_back(path);
+  }
+  if (json) {
+    std::ostringstream s;
+    s << "{\"raw\": " << jsonQuote(raw_path) << ", \"width\": " << raw.width << ", \"height\": " << raw.height
+      << ", \"border_band\": " << options.border_band << ", \"min_region_pixels\": " << options.min_region_pixels
+      << ", \"frames\": [";
+    for (std::size_t k = 0; k < residuals.size(); ++k)
+      s << (k ? ", " : "") << "{\"name\": " << jsonQuote(names[k]) << ", " << toJson(residuals[k]).substr(1);
+    std::cout << s.str() << "]}" << std::endl;
+    return 0;
+  }
+  std::cout << regions.planes.size() << " planar region" << (regions.planes.size() == 1 ? "" : "s") << " in '"
+            << raw_path << "' (at least " << options.min_region_pixels << " px; border band "
+            << options.border_band << " px)\n";
+  std::cout << std::left << std::setw(40) << "frame" << std::right << std::setw(13) << "interior mm" << std::setw(11)
+            << "border mm" << std::setw(13) << "interior px" << std::setw(11) << "border px" << std::setw(8) << "lost"
+            << "\n";
+  for (std::size_t k = 0; k < residuals.size(); ++k) {
+    const PlanarResidual& r = residuals[k];
+    std::cout << std::left << std::setw(40) << (k == 0 ? "raw: " + fileName(names[k]) : fileName(names[k]))
+              << std::right << std::setw(13) << millimetres(r.interior_rms) << std::setw(11)
+              << millimetres(r.border_rms) << std::setw(13) << r.interior_pixels << std::setw(11) << r.border_pixels
+              << std::setw(8) << r.points_lost << "\n";
+  }
+  std::cout << std::flush;
+  return 0;
+}
+
+/// --jitter: per-pixel range standard deviation over the frames of each static sequence.
+int
+runJitter(const po::variables_map& vm, const std::vector<std::string>& sequences, bool json)
+{
+  if (sequences.empty())
+    throw UsageError("--jitter expects at least one directory of frames");
+  const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
+  std::vector<TemporalJitter> jitters;
+  for (const std::string& directory : sequences) {
+    JitterEvaluator evaluator;
+    for (const std::string& path : listInputFrames(directory)) {
+      const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics);
+      try {
+        evaluator.add(frame);
+      } catch (const std::invalid_argument& e) {
+        throw InputError("'" + path + "': " + e.what());
+      }
+    }
+    jitters.push_back(evaluator.jitter());
+  }
+  if (json) {
+    std::ostringstream s;
+    s << "{\"sequences\": [";
+    for (std::size_t k = 0; k < jitters.size(); ++k)
+      s << (k ? ", " : "") << "{\"name\": " << jsonQuote(sequences[k]) << ", " << toJson(jitters[k]).substr(1);
+    std::cout << s.str() << "]}" << std::endl;
+    return 0;
+  }
+  std::cout << std::left << std::setw(40) << "sequence" << std::right << std::setw(8) << "frames" << std::setw(10)
+            << "pixels" << std::setw(10) << "mean mm" << std::setw(12) << "median mm" << "\n";
+  for (std::size_t k = 0; k < jitters.size(); ++k)
+    std::cout << std::left << std::setw(40) << sequences[k] << std::right << std::setw(8) << jitters[k].frames
+              << std::setw(10) << jitters[k].pixels << std::setw(10) << millimetres(jitters[k].mean) << std::setw(12)
+              << millimetres(jitters[k].median) << "\n";
+  std::cout << std::flush;
+  return 0;
+}
+
 int
 run(int argc, char** argv)
 {
+  const PlanarRegionOptions planar;
   po::options_description options("Options");
   // clang-format off
   options.add_options()
@@ -141,18 +291,57 @@ run(int argc, char** argv)
     ("gt", po::value<std::string>(), "ground truth: PCD file or directory of *.pcd frames")
     ("result", po::value<std::string>(), "result to score: PCD file or directory (same frame names)")
     ("input", po::value<std::string>(), "noisy input the result was computed from (for lost points and the baseline)")
-    ("json", "print one JSON object instead of the table");
+    ("json", "print one JSON object instead of the table")
+    ("raw", po::value<std::string>(), "real frame without ground truth: find planar regions in it and score the "
+     "frames given as arguments (filtered copies of it) against their planes")
+    ("min-region", po::value<int>()->default_value(planar.min_region_pixels), "--raw: smallest planar region, pixels")
+    ("border-band", po::value<int>()->default_value(planar.border_band),
+     "--raw: width of the band along a region's border reported apart, pixels")
+    ("block-size", po::value<int>()->default_value(planar.block_size), "--raw: side of the plane-fit seed blocks, pixels")
+    ("plane-distance", po::value<double>()->default_value(planar.plane_distance),
+     "--raw: largest distance of a point from its region's plane at 1 m depth, m (scaled by z^2)")
+    ("jitter", "static sequences without ground truth: per-pixel range standard deviation over the frames of each "
+     "directory given as an argument");
   // clang-format on
+  addDepthImageOptions(options);
+  po::options_description hidden;
+  hidden.add_options()("paths", po::value<std::vector<std::string>>(), "positional arguments");
+  po::options_description all;
+  all.add(options).add(hidden);
   po::positional_options_description positional;
-  positional.add("gt", 1).add("result", 1);
+  positional.add("paths", -1);
   po::variables_map vm;
-  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
+  po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+  if (vm.count("help")) {
+    std::cout << kUsage << "\n\n" << options << "\n";
     return 0;
-  if (!vm.count("gt") || !vm.count("result"))
+  }
+  po::notify(vm);
+  std::vector<std::string> paths;
+  if (vm.count("paths"))
+    paths = vm["paths"].as<std::vector<std::string>>();
+  if (vm.count("raw") && vm.count("jitter"))
+    throw UsageError("--raw and --jitter are separate modes; give one of them");
+  if (vm.count("raw") || vm.count("jitter")) {
+    if (vm.count("gt") || vm.count("result") || vm.count("input"))
+      throw UsageError("--gt, --result and --input belong to the ground-truth mode, not to --raw or --jitter");
+    return vm.count("raw") ? runPlanar(vm, paths, vm.count("json") > 0) : runJitter(vm, paths, vm.count("json") > 0);
+  }
+  // Ground-truth mode: GT and RESULT as the two positional arguments or as options.
+  std::size_t next = 0;
+  std::string gt_path, result_path;
+  if (vm.count("gt"))
+    gt_path = vm["gt"].as<std::string>();
+  else if (next < paths.size())
+    gt_path = paths[next++];
+  if (vm.count("result"))
+    result_path = vm["result"].as<std::string>();
+  else if (next < paths.size())
+    result_path = paths[next++];
+  if (next < paths.size())
+    throw UsageError("unexpected argument '" + paths[next] + "' (expected GT and RESULT)");
+  if (gt_path.empty() || result_path.empty())
     throw UsageError("expected GT and RESULT");
-
-  const std::string gt_path = vm["gt"].as<std::string>();
-  const std::string result_path = vm["result"].as<std::string>();
   const std::string input_path = vm.count("input") ? vm["input"].as<std::string>() : std::string();
   const bool has_input = !input_path.empty();
   const bool json = vm.count("json") > 0;

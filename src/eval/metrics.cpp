@@ -1,6 +1,8 @@
 // Accuracy metrics of filtered range frames against ground truth (see evaluation.h).
 #include <range_nlm/eval/metrics.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +10,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace range_nlm
 {
@@ -517,6 +520,330 @@ toJson(const SequenceMetrics& metrics, const std::vector<std::string>& frame_nam
     s << jsonMembers(metrics.frames[k]) << "}";
   }
   s << "]}";
+  return s.str();
+}
+
+namespace
+{
+
+/// Running sums of points for an orthogonal least-squares plane fit.
+struct PlaneSums
+{
+  std::size_t n = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+
+  void add(const pcl::PointXYZ& p)
+  {
+    const Eigen::Vector3d q(p.x, p.y, p.z);
+    ++n;
+    sum += q;
+    outer += q * q.transpose();
+  }
+  /// Plane through the centroid along the smallest eigenvector of the covariance, and the RMS
+  /// orthogonal residual (sqrt of the smallest eigenvalue).
+  Eigen::Vector4d fit(double* rms = nullptr) const
+  {
+    const Eigen::Vector3d c = sum / double(n);
+    const Eigen::Matrix3d cov = outer / double(n) - c * c.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+    Eigen::Vector3d normal = solver.eigenvectors().col(0);
+    // Deterministic orientation: toward the sensor at the origin.
+    if (normal.dot(c) > 0.0)
+      normal = -normal;
+    if (rms)
+      *rms = std::sqrt(std::max(solver.eigenvalues()[0], 0.0));
+    return Eigen::Vector4d(normal.x(), normal.y(), normal.z(), -normal.dot(c));
+  }
+};
+
+/// Whether a plane is seen at more than 75 degrees from its normal (from its centroid): such a
+/// plane nearly contains the lines of sight, so a thin strip of pixels at any depths fits it.
+bool
+grazing(const Eigen::Vector4d& plane, const PlaneSums& sums)
+{
+  const Eigen::Vector3d c = sums.sum / double(sums.n);
+  return std::abs(plane.head<3>().dot(c.normalized())) < std::cos(75.0 * 3.14159265358979323846 / 180.0);
+}
+
+double
+planeDistance(const Eigen::Vector4d& plane, const pcl::PointXYZ& p)
+{
+  return plane[0] * p.x + plane[1] * p.y + plane[2] * p.z + plane[3];
+}
+
+} // namespace
+
+void
+PlanarRegionOptions::validate() const
+{
+  if (min_region_pixels < 3)
+    fail("min_region_pixels", min_region_pixels, "must be at least 3 pixels");
+  if (border_band < 0)
+    fail("border_band", border_band, "must be >= 0 pixels");
+  if (block_size < 3)
+    fail("block_size", block_size, "must be at least 3 pixels");
+  if (!(std::isfinite(plane_distance) && plane_distance > 0.0))
+    fail("plane_distance", plane_distance, "must be finite and > 0 metres");
+}
+
+PlanarRegions
+findPlanarRegions(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionOptions& options)
+{
+  options.validate();
+  checkOrganized(raw, "raw frame");
+  const int width = int(raw.width), height = int(raw.height), b = options.block_size;
+  PlanarRegions out;
+  out.width = width;
+  out.height = height;
+  out.label.assign(raw.size(), -1);
+  out.border.assign(raw.size(), 0);
+  auto tolerance = [&](float z) { return options.plane_distance * double(z) * double(z); };
+
+  // Seed blocks: fully valid, planar within a third of the tolerance at their mean depth.
+  struct Seed
+  {
+    double score;
+    int u0, v0;
+  };
+  std::vector<Seed> seeds;
+  for (int v0 = 0; v0 + b <= height; v0 += b)
+    for (int u0 = 0; u0 + b <= width; u0 += b) {
+      PlaneSums sums;
+      bool complete = true;
+      for (int v = v0; v < v0 + b && complete; ++v)
+        for (int u = u0; u < u0 + b; ++u) {
+          const pcl::PointXYZ& p = raw[std::size_t(v) * width + u];
+          if (!isValid(p)) {
+            complete = false;
+            break;
+          }
+          sums.add(p);
+        }
+      if (!complete)
+        continue;
+      double rms;
+      const Eigen::Vector4d plane = sums.fit(&rms);
+      const double z = sums.sum.z() / double(sums.n);
+      const double allowed = options.plane_distance * z * z / 3.0;
+      if (rms < allowed && !grazing(plane, sums))
+        seeds.push_back({rms / allowed, u0, v0});
+    }
+  std::stable_sort(seeds.begin(), seeds.end(), [](const Seed& a, const Seed& c) { return a.score < c.score; });
+
+  // A pixel joins a region only if the median of the distances of its valid 3x3 neighbours (at
+  // least 4) lies within a third of the tolerance: the median's noise is well below a point's,
+  // so regions stop at creases instead of creeping a noise width beyond them, and it ignores a
+  // minority of neighbours beyond a depth edge, so pixels at edges still join.
+  auto medianDistance = [&](const Eigen::Vector4d& plane, int u, int v, double& median) {
+    double d[9];
+    int n = 0;
+    for (int dv = -1; dv <= 1; ++dv)
+      for (int du = -1; du <= 1; ++du) {
+        if (u + du < 0 || v + dv < 0 || u + du >= width || v + dv >= height)
+          continue;
+        const pcl::PointXYZ& q = raw[std::size_t(v + dv) * width + u + du];
+        if (isValid(q))
+          d[n++] = planeDistance(plane, q);
+      }
+    if (n < 4)
+      return false;
+    std::nth_element(d, d + n / 2, d + n);
+    median = d[n / 2];
+    return true;
+  };
+
+  // Pixels of dropped regions: they may join later regions, but seed none (a seed inside would
+  // grow the same dropped region again).
+  std::vector<unsigned char> dropped(raw.size(), 0);
+  std::vector<std::size_t> members, queue;
+  for (const Seed& seed : seeds) {
+    bool free = true;
+    for (int v = seed.v0; v < seed.v0 + b && free; ++v)
+      for (int u = seed.u0; u < seed.u0 + b; ++u)
+        free = free && out.label[std::size_t(v) * width + u] == -1 && !dropped[std::size_t(v) * width + u];
+    if (!free)
+      continue;
+    const int id = int(out.planes.size());
+    PlaneSums sums;
+    members.clear();
+    queue.clear();
+    for (int v = seed.v0; v < seed.v0 + b; ++v)
+      for (int u = seed.u0; u < seed.u0 + b; ++u) {
+        const std::size_t i = std::size_t(v) * width + u;
+        out.label[i] = id;
+        sums.add(raw[i]);
+        members.push_back(i);
+        queue.push_back(i);
+      }
+    Eigen::Vector4d plane = sums.fit();
+    std::size_t refit_at = 2 * sums.n;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const int u = int(queue[head] % std::size_t(width)), v = int(queue[head] / std::size_t(width));
+      const int nu[4] = {u - 1, u + 1, u, u}, nv[4] = {v, v, v - 1, v + 1};
+      for (int k = 0; k < 4; ++k) {
+        if (nu[k] < 0 || nv[k] < 0 || nu[k] >= width || nv[k] >= height)
+          continue;
+        const std::size_t j = std::size_t(nv[k]) * width + nu[k];
+        const pcl::PointXYZ& p = raw[j];
+        double median;
+        if (out.label[j] != -1 || !isValid(p) || std::abs(planeDistance(plane, p)) > tolerance(p.z) ||
+            !medianDistance(plane, nu[k], nv[k], median) || 3.0 * std::abs(median) > tolerance(p.z))
+          continue;
+        out.label[j] = id;
+        sums.add(p);
+        members.push_back(j);
+        queue.push_back(j);
+        if (sums.n >= refit_at) {
+          plane = sums.fit();
+          refit_at = 2 * sums.n;
+        }
+      }
+    }
+    // Too small, or not planar after all (grown around a curved surface or over a crease).
+    double rms;
+    plane = sums.fit(&rms);
+    const double z = sums.sum.z() / double(sums.n);
+    if (members.size() < std::size_t(options.min_region_pixels) || rms >= options.plane_distance * z * z / 3.0 ||
+        grazing(plane, sums)) {
+      for (std::size_t i : members) {
+        out.label[i] = -1;
+        dropped[i] = 1;
+      }
+      continue;
+    }
+    out.planes.push_back(plane);
+    out.sizes.push_back(members.size());
+  }
+
+  // Border band: region pixels within border_band of a pixel of the image outside the region.
+  for (int id = 0; id < int(out.planes.size()); ++id) {
+    std::vector<unsigned char> outside(raw.size());
+    for (std::size_t i = 0; i < raw.size(); ++i)
+      outside[i] = out.label[i] != id;
+    const std::vector<unsigned char> near = dilate(outside, width, height, options.border_band);
+    for (std::size_t i = 0; i < raw.size(); ++i)
+      if (out.label[i] == id && near[i])
+        out.border[i] = 1;
+  }
+  return out;
+}
+
+PlanarResidual
+planarResidual(const PlanarRegions& regions, const pcl::PointCloud<pcl::PointXYZ>& frame)
+{
+  checkOrganized(frame, "frame");
+  if (int(frame.width) != regions.width || int(frame.height) != regions.height)
+    throw std::invalid_argument("range_nlm: frame is " + std::to_string(frame.width) + " x " +
+                                std::to_string(frame.height) + " but the planar regions are of a " +
+                                std::to_string(regions.width) + " x " + std::to_string(regions.height) + " frame");
+  PlanarResidual r;
+  r.regions = regions.planes.size();
+  double interior_sq = 0.0, border_sq = 0.0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const int id = regions.label[i];
+    if (id < 0)
+      continue;
+    const pcl::PointXYZ& p = frame[i];
+    if (!isValid(p)) {
+      ++r.points_lost;
+      continue;
+    }
+    const double e = planeDistance(regions.planes[std::size_t(id)], p);
+    if (regions.border[i]) {
+      border_sq += e * e;
+      ++r.border_pixels;
+    } else {
+      interior_sq += e * e;
+      ++r.interior_pixels;
+    }
+  }
+  r.interior_rms = rootMean(interior_sq, r.interior_pixels);
+  r.border_rms = rootMean(border_sq, r.border_pixels);
+  return r;
+}
+
+void
+JitterEvaluator::add(const pcl::PointCloud<pcl::PointXYZ>& frame)
+{
+  checkOrganized(frame, "frame " + std::to_string(frames_));
+  if (frames_ == 0) {
+    width_ = int(frame.width);
+    height_ = int(frame.height);
+    mean_.assign(frame.size(), 0.0);
+    m2_.assign(frame.size(), 0.0);
+    valid_.assign(frame.size(), 1);
+  } else if (int(frame.width) != width_ || int(frame.height) != height_) {
+    throw std::invalid_argument("range_nlm: frame " + std::to_string(frames_) + " is " +
+                                std::to_string(frame.width) + " x " + std::to_string(frame.height) +
+                                " but the sequence is " + std::to_string(width_) + " x " + std::to_string(height_));
+  }
+  ++frames_;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const pcl::PointXYZ& p = frame[i];
+    if (!isValid(p)) {
+      valid_[i] = 0;
+      continue;
+    }
+    const double range = std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z);
+    const double delta = range - mean_[i];
+    mean_[i] += delta / double(frames_);
+    m2_[i] += delta * (range - mean_[i]);
+  }
+}
+
+TemporalJitter
+JitterEvaluator::jitter() const
+{
+  TemporalJitter j;
+  j.frames = frames_;
+  std::vector<double> stds;
+  if (frames_ >= 2)
+    for (std::size_t i = 0; i < valid_.size(); ++i)
+      if (valid_[i])
+        stds.push_back(std::sqrt(m2_[i] / double(frames_ - 1)));
+  j.pixels = stds.size();
+  if (stds.empty()) {
+    j.mean = j.median = kNaN;
+    return j;
+  }
+  double sum = 0.0;
+  for (double x : stds)
+    sum += x;
+  j.mean = sum / double(stds.size());
+  const std::size_t mid = stds.size() / 2;
+  std::nth_element(stds.begin(), stds.begin() + std::ptrdiff_t(mid), stds.end());
+  j.median = stds[mid];
+  if (stds.size() % 2 == 0)
+    j.median = 0.5 * (j.median + *std::max_element(stds.begin(), stds.begin() + std::ptrdiff_t(mid)));
+  return j;
+}
+
+TemporalJitter
+temporalJitter(const std::vector<pcl::PointCloud<pcl::PointXYZ>>& frames)
+{
+  JitterEvaluator evaluator;
+  for (const auto& f : frames)
+    evaluator.add(f);
+  return evaluator.jitter();
+}
+
+std::string
+toJson(const PlanarResidual& r)
+{
+  std::ostringstream s;
+  s << "{\"regions\": " << r.regions << ", \"interior_rms_mm\": " << number(r.interior_rms * 1000.0)
+    << ", \"border_rms_mm\": " << number(r.border_rms * 1000.0) << ", \"interior_pixels\": " << r.interior_pixels
+    << ", \"border_pixels\": " << r.border_pixels << ", \"points_lost\": " << r.points_lost << "}";
+  return s.str();
+}
+
+std::string
+toJson(const TemporalJitter& j)
+{
+  std::ostringstream s;
+  s << "{\"frames\": " << j.frames << ", \"pixels\": " << j.pixels << ", \"mean_jitter_mm\": "
+    << number(j.mean * 1000.0) << ", \"median_jitter_mm\": " << number(j.median * 1000.0) << "}";
   return s.str();
 }
 

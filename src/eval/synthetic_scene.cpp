@@ -456,6 +456,310 @@ uniform(std::mt19937_64& rng)
   return double(rng() >> 11) * 0x1.0p-53;
 }
 
+/// N(0, 1) from two uniforms (Box-Muller, cosine branch).
+double
+gaussian(std::mt19937_64& rng)
+{
+  const double u1 = uniform(rng), u2 = uniform(rng);
+  return std::sqrt(-2.0 * std::log(1.0 - u1)) * std::cos(2.0 * kPi * u2);
+}
+
+/// Rounds x to a multiple of step; step 0 leaves x unchanged.
+double
+quantize(double x, double step)
+{
+  return step > 0.0 ? std::round(x / step) * step : x;
+}
+
+/// The random stream of a sensor model: its own stream per frame (seed, frame and model), so the
+/// draws of the older models stay as they were.
+std::mt19937_64
+sensorStream(const SceneOptions& options, int frame)
+{
+  std::seed_seq seq{std::uint32_t(options.seed & 0xffffffffu), std::uint32_t(options.seed >> 32),
+                    std::uint32_t(frame), std::uint32_t(0x5e750000u + unsigned(options.noise))};
+  return std::mt19937_64(seq);
+}
+
+/// A fresh N(0, 1) field of width x height with autocorrelation exp(-(lag / length)^2): white
+/// noise on a padded grid blurred by a separable Gaussian of sigma length / 2 and divided by the
+/// blur's L2 norm, so the variance is exactly 1. length 0 gives white noise.
+std::vector<double>
+correlatedField(int width, int height, double length, std::mt19937_64& rng)
+{
+  const double sigma = 0.5 * length;
+  const int radius = sigma > 0.0 ? int(std::ceil(4.0 * sigma)) : 0;
+  std::vector<double> kernel(std::size_t(2 * radius + 1), 1.0);
+  if (radius > 0) {
+    double sum = 0.0;
+    for (int k = -radius; k <= radius; ++k)
+      sum += kernel[std::size_t(k + radius)] = std::exp(-0.5 * k * k / (sigma * sigma));
+    for (double& w : kernel)
+      w /= sum;
+  }
+  double norm_sq = 0.0;
+  for (double w : kernel)
+    norm_sq += w * w;
+  // 2-D separable kernel: sum of squared weights is (sum_k w_k^2)^2; its root is norm_sq.
+  const double renormalise = 1.0 / norm_sq;
+  const int pw = width + 2 * radius, ph = height + 2 * radius;
+  std::vector<double> white(std::size_t(pw) * ph);
+  for (double& x : white)
+    x = gaussian(rng);
+  std::vector<double> rows(std::size_t(width) * ph);
+  for (int y = 0; y < ph; ++y)
+    for (int x = 0; x < width; ++x) {
+      double acc = 0.0;
+      for (int k = 0; k <= 2 * radius; ++k)
+        acc += kernel[std::size_t(k)] * white[std::size_t(y) * pw + x + k];
+      rows[std::size_t(y) * width + x] = acc;
+    }
+  std::vector<double> field(std::size_t(width) * height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      double acc = 0.0;
+      for (int k = 0; k <= 2 * radius; ++k)
+        acc += kernel[std::size_t(k)] * rows[std::size_t(y + k) * width + x];
+      field[std::size_t(y) * width + x] = acc * renormalise;
+    }
+  return field;
+}
+
+/// Whether pixel (u, v) carries a dot of the kinect1 projector pattern: a fixed hash of the
+/// position, one dot in about three pixels, the same for every seed and frame.
+bool
+kinectDot(int u, int v)
+{
+  std::uint64_t h = (std::uint64_t(std::uint32_t(u)) << 32) ^ std::uint32_t(v);
+  h += 0x9e3779b97f4a7c15ull;
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  h ^= h >> 31;
+  return h % 3 == 0;
+}
+
+/// Per-pixel inputs of the sensor models.
+struct SensorInput
+{
+  const SceneOptions& options;
+  const std::vector<int>& shape_index;
+  const std::vector<double>& depth;
+  const std::vector<double>& cosine;
+  double cx, cy;
+};
+
+/// Sets q to the point of pixel (u, v) at depth z, NaN unless z is finite and > 0.
+bool
+placeOnRay(const SensorInput& in, int u, int v, double z, pcl::PointXYZ& q)
+{
+  if (!(std::isfinite(z) && z > 0.0))
+    return false;
+  q.x = float((u - in.cx) / in.options.fx * z);
+  q.y = float((v - in.cy) / in.options.fy * z);
+  q.z = float(z);
+  return true;
+}
+
+/// Stereo: disparity-domain noise, partly correlated, quantized. Draws: the correlated field
+/// (padded grid, row-major), then per pixel in scan order a white normal (two uniforms) and a
+/// dropout uniform, whether or not the pixel is hit.
+bool
+applyStereo(const SensorInput& in, std::mt19937_64& rng, pcl::PointCloud<pcl::PointXYZ>& noisy)
+{
+  const SceneOptions& o = in.options;
+  const int width = o.width, height = o.height;
+  const double fb = o.fx * o.stereo_baseline;
+  const double sigma = o.effectiveNoiseScale() * o.stereo_disparity_sigma;
+  const double share = o.stereo_correlated_share;
+  const std::vector<double> field = share > 0.0 ? correlatedField(width, height, o.stereo_correlation_length, rng)
+                                                : std::vector<double>(std::size_t(width) * height, 0.0);
+  const double a = std::sqrt(1.0 - share), b = std::sqrt(share);
+  const double cos_grazing = std::cos(degreesToRadians(o.grazing_dropout));
+  const bool grazing_enabled = o.grazing_dropout < 90.0;
+  bool dense = true;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = std::size_t(v) * width + u;
+      const double white = gaussian(rng);
+      const double drop = uniform(rng);
+      if (in.shape_index[i] < 0 || drop < o.dropout || (grazing_enabled && in.cosine[i] < cos_grazing)) {
+        dense = false;
+        continue;
+      }
+      const double d = fb / in.depth[i];
+      const double measured = quantize(d + sigma * (a * white + b * field[i]), o.stereo_subpixel);
+      if (!(measured > 0.0) || !placeOnRay(in, u, v, fb / measured, noisy[i]))
+        dense = false;
+    }
+  return dense;
+}
+
+/// kinect1 (simkinect): shifted bilinear disparity, block consistency against the dot pattern,
+/// disparity noise, quantization, depth rounding. Draws: per pixel in scan order two normals
+/// (the shifts), then per pixel in scan order a normal (disparity noise) and a dropout uniform.
+bool
+applyKinect1(const SensorInput& in, std::mt19937_64& rng, pcl::PointCloud<pcl::PointXYZ>& noisy)
+{
+  const SceneOptions& o = in.options;
+  const int width = o.width, height = o.height;
+  const double fb = o.fx * o.kinect1_baseline;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> disparity;
+  disparity.assign(std::size_t(width) * height, nan);
+  for (std::size_t i = 0; i < disparity.size(); ++i)
+    if (in.shape_index[i] >= 0)
+      disparity[i] = fb / in.depth[i];
+
+  // Bilinear samples at shifted positions; NaN if a corner is outside the image or has no surface.
+  std::vector<double> shifted;
+  shifted.assign(disparity.size(), nan);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const double x = u + o.kinect1_shift_sigma * gaussian(rng);
+      const double y = v + o.kinect1_shift_sigma * gaussian(rng);
+      const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+      if (x0 < 0 || y0 < 0 || x0 + 1 >= width || y0 + 1 >= height)
+        continue;
+      const double fx = x - x0, fy = y - y0;
+      const std::size_t i00 = std::size_t(y0) * width + x0, i10 = i00 + 1, i01 = i00 + width, i11 = i01 + 1;
+      shifted[std::size_t(v) * width + u] =
+          (1.0 - fy) * ((1.0 - fx) * disparity[i00] + fx * disparity[i10]) +
+          fy * ((1.0 - fx) * disparity[i01] + fx * disparity[i11]);
+    }
+
+  const int half = o.kinect1_block / 2;
+  const double cos_grazing = std::cos(degreesToRadians(o.grazing_dropout));
+  const bool grazing_enabled = o.grazing_dropout < 90.0;
+  bool dense = true;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = std::size_t(v) * width + u;
+      const double noise = gaussian(rng);
+      const double drop = uniform(rng);
+      if (in.shape_index[i] < 0 || drop < o.dropout || (grazing_enabled && in.cosine[i] < cos_grazing) ||
+          !std::isfinite(shifted[i]) || u < half || v < half || u + half >= width || v + half >= height) {
+        dense = false;
+        continue;
+      }
+      // Block consistency: mean over the dots, then inliers by weighted difference. A dot without
+      // a surface makes the mean meaningless (simkinect: depth 0, an infinite disparity).
+      double sum = 0.0;
+      int dots = 0;
+      bool consistent = true;
+      for (int dv = -half; dv <= half; ++dv)
+        for (int du = -half; du <= half; ++du)
+          if (kinectDot(u + du, v + dv)) {
+            ++dots;
+            const double s = shifted[std::size_t(v + dv) * width + u + du];
+            consistent = consistent && std::isfinite(s);
+            sum += s;
+          }
+      consistent = consistent && dots > 0;
+      if (consistent) {
+        const int finite = dots;
+        const double mean = sum / finite;
+        int inliers = 0;
+        for (int dv = -half; dv <= half; ++dv)
+          for (int du = -half; du <= half; ++du)
+            if (kinectDot(u + du, v + dv)) {
+              const double s = shifted[std::size_t(v + dv) * width + u + du];
+              const double weight = 1.0 / (1.44 * std::max(du * du + dv * dv, 1));
+              inliers += std::isfinite(s) && std::abs(s - mean) * weight < o.kinect1_block_threshold;
+            }
+        consistent = inliers * 1.2 > dots;
+      }
+      if (!consistent) {
+        dense = false;
+        continue;
+      }
+      const double sigma = o.effectiveNoiseScale() * o.kinect1_disparity_sigma;
+      const double measured = quantize(shifted[i] + sigma * noise, o.kinect1_subpixel);
+      if (!(measured > 0.0) || !placeOnRay(in, u, v, quantize(fb / measured, o.kinect1_depth_unit), noisy[i]))
+        dense = false;
+    }
+  return dense;
+}
+
+/// tof: mixed pixels at depth discontinuities, range noise growing with range. Draws: per pixel
+/// in scan order a mixing uniform, a mixing fraction uniform, a normal (two uniforms) and a
+/// dropout uniform.
+bool
+applyTof(const SensorInput& in, std::mt19937_64& rng, pcl::PointCloud<pcl::PointXYZ>& noisy)
+{
+  const SceneOptions& o = in.options;
+  const int width = o.width, height = o.height;
+  // Range per unit depth of each pixel's ray.
+  auto rayLength = [&](int u, int v) {
+    const double x = (u - in.cx) / o.fx, y = (v - in.cy) / o.fy;
+    return std::sqrt(x * x + y * y + 1.0);
+  };
+  std::vector<double> range(in.depth.size(), 0.0);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = std::size_t(v) * width + u;
+      if (in.shape_index[i] >= 0)
+        range[i] = in.depth[i] * rayLength(u, v);
+    }
+  // Discontinuity seeds: hit pixels with a hit 8-neighbour whose range differs by more than the jump.
+  std::vector<unsigned char> seed(range.size(), 0);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = std::size_t(v) * width + u;
+      if (in.shape_index[i] < 0)
+        continue;
+      for (int dv = -1; dv <= 1 && !seed[i]; ++dv)
+        for (int du = -1; du <= 1; ++du) {
+          const int nu = u + du, nv = v + dv;
+          if (nu < 0 || nv < 0 || nu >= width || nv >= height)
+            continue;
+          const std::size_t j = std::size_t(nv) * width + nu;
+          if (in.shape_index[j] >= 0 && std::abs(range[j] - range[i]) > o.tof_edge_jump * std::min(range[i], range[j])) {
+            seed[i] = 1;
+            break;
+          }
+        }
+    }
+  const int band = o.tof_edge_band;
+  const double cos_grazing = std::cos(degreesToRadians(o.grazing_dropout));
+  const bool grazing_enabled = o.grazing_dropout < 90.0;
+  bool dense = true;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = std::size_t(v) * width + u;
+      const double mix = uniform(rng), fraction = uniform(rng);
+      const double noise = gaussian(rng);
+      const double drop = uniform(rng);
+      if (in.shape_index[i] < 0 || drop < o.dropout || (grazing_enabled && in.cosine[i] < cos_grazing)) {
+        dense = false;
+        continue;
+      }
+      double r = range[i];
+      if (band > 0 && mix < o.tof_mixed_probability) {
+        double r_near = r, r_far = r;
+        bool near_edge = false;
+        for (int dv = -band; dv <= band; ++dv)
+          for (int du = -band; du <= band; ++du) {
+            const int nu = u + du, nv = v + dv;
+            if (nu < 0 || nv < 0 || nu >= width || nv >= height)
+              continue;
+            const std::size_t j = std::size_t(nv) * width + nu;
+            if (in.shape_index[j] < 0)
+              continue;
+            near_edge = near_edge || seed[j];
+            r_near = std::min(r_near, range[j]);
+            r_far = std::max(r_far, range[j]);
+          }
+        if (near_edge)
+          r = (1.0 - fraction) * r_near + fraction * r_far;
+      }
+      const double sigma = o.effectiveNoiseScale() * (o.tof_sigma + o.tof_sigma_slope * r);
+      const double measured = r + sigma * noise;
+      if (!placeOnRay(in, u, v, measured / rayLength(u, v), noisy[i]))
+        dense = false;
+    }
+  return dense;
+}
+
 } // namespace
 
 SceneType
@@ -479,7 +783,14 @@ noiseModelFromString(const std::string& name)
     return NoiseModel::laser;
   if (name == "stripes")
     return NoiseModel::stripes;
-  throw std::invalid_argument("unknown noise model '" + name + "' (expected none, kinect, laser or stripes)");
+  if (name == "stereo")
+    return NoiseModel::stereo;
+  if (name == "kinect1")
+    return NoiseModel::kinect1;
+  if (name == "tof")
+    return NoiseModel::tof;
+  throw std::invalid_argument("unknown noise model '" + name +
+                              "' (expected none, kinect, laser, stripes, stereo, kinect1 or tof)");
 }
 
 Motion
@@ -510,6 +821,12 @@ toString(NoiseModel noise)
     return "laser";
   case NoiseModel::stripes:
     return "stripes";
+  case NoiseModel::stereo:
+    return "stereo";
+  case NoiseModel::kinect1:
+    return "kinect1";
+  case NoiseModel::tof:
+    return "tof";
   }
   return "unknown";
 }
@@ -544,7 +861,10 @@ SceneOptions::effectiveNoiseScale() const
 {
   if (noise_scale)
     return *noise_scale;
-  return noise == NoiseModel::kinect ? 1.0 : 0.25;
+  return (noise == NoiseModel::kinect || noise == NoiseModel::stereo || noise == NoiseModel::kinect1 ||
+          noise == NoiseModel::tof)
+             ? 1.0
+             : 0.25;
 }
 
 void
@@ -572,6 +892,40 @@ SceneOptions::validate() const
     fail("stripe_amplitude", stripe_amplitude, "must be finite and >= 0 metres");
   if (!(std::isfinite(stripe_period) && stripe_period > 0.0))
     fail("stripe_period", stripe_period, "must be finite and > 0 pixels");
+  if (!(std::isfinite(stereo_baseline) && stereo_baseline > 0.0))
+    fail("stereo_baseline", stereo_baseline, "must be finite and > 0 metres");
+  if (!(std::isfinite(stereo_disparity_sigma) && stereo_disparity_sigma >= 0.0))
+    fail("stereo_disparity_sigma", stereo_disparity_sigma, "must be finite and >= 0 pixels");
+  if (!(stereo_correlated_share >= 0.0 && stereo_correlated_share <= 1.0))
+    fail("stereo_correlated_share", stereo_correlated_share, "must be a share of the variance in [0, 1]");
+  if (!(stereo_correlation_length >= 0.0 && stereo_correlation_length <= 64.0))
+    fail("stereo_correlation_length", stereo_correlation_length, "must be in [0, 64] pixels");
+  if (!(std::isfinite(stereo_subpixel) && stereo_subpixel >= 0.0))
+    fail("stereo_subpixel", stereo_subpixel, "must be finite and >= 0 pixels (0 = no quantization)");
+  if (!(std::isfinite(kinect1_baseline) && kinect1_baseline > 0.0))
+    fail("kinect1_baseline", kinect1_baseline, "must be finite and > 0 metres");
+  if (!(std::isfinite(kinect1_shift_sigma) && kinect1_shift_sigma >= 0.0 && kinect1_shift_sigma <= 16.0))
+    fail("kinect1_shift_sigma", kinect1_shift_sigma, "must be in [0, 16] pixels");
+  if (!(std::isfinite(kinect1_disparity_sigma) && kinect1_disparity_sigma >= 0.0))
+    fail("kinect1_disparity_sigma", kinect1_disparity_sigma, "must be finite and >= 0 pixels");
+  if (!(std::isfinite(kinect1_subpixel) && kinect1_subpixel >= 0.0))
+    fail("kinect1_subpixel", kinect1_subpixel, "must be finite and >= 0 pixels (0 = no quantization)");
+  if (kinect1_block < 1 || kinect1_block > 31 || kinect1_block % 2 == 0)
+    fail("kinect1_block", kinect1_block, "must be odd and in [1, 31] pixels");
+  if (!(std::isfinite(kinect1_block_threshold) && kinect1_block_threshold > 0.0))
+    fail("kinect1_block_threshold", kinect1_block_threshold, "must be finite and > 0 pixels");
+  if (!(std::isfinite(kinect1_depth_unit) && kinect1_depth_unit >= 0.0))
+    fail("kinect1_depth_unit", kinect1_depth_unit, "must be finite and >= 0 metres (0 = no rounding)");
+  if (!(std::isfinite(tof_sigma) && tof_sigma >= 0.0))
+    fail("tof_sigma", tof_sigma, "must be finite and >= 0 metres");
+  if (!(std::isfinite(tof_sigma_slope) && tof_sigma_slope >= 0.0))
+    fail("tof_sigma_slope", tof_sigma_slope, "must be finite and >= 0 metres per metre");
+  if (tof_edge_band < 0 || tof_edge_band > 16)
+    fail("tof_edge_band", tof_edge_band, "must be in [0, 16] pixels");
+  if (!(tof_mixed_probability >= 0.0 && tof_mixed_probability <= 1.0))
+    fail("tof_mixed_probability", tof_mixed_probability, "must be a probability in [0, 1]");
+  if (!(std::isfinite(tof_edge_jump) && tof_edge_jump > 0.0))
+    fail("tof_edge_jump", tof_edge_jump, "must be finite and > 0 (a fraction of the range)");
   if (!(dropout >= 0.0 && dropout <= 1.0))
     fail("dropout", dropout, "must be a probability in [0, 1]");
   if (!(grazing_dropout > 0.0 && grazing_dropout <= 90.0))
@@ -688,6 +1042,21 @@ renderFrame(const SceneOptions& options, int frame)
     }
   }
   out.truth.is_dense = std::find(out.shape_index.begin(), out.shape_index.end(), -1) == out.shape_index.end();
+
+  if (options.noise == NoiseModel::stereo || options.noise == NoiseModel::kinect1 ||
+      options.noise == NoiseModel::tof) {
+    for (auto& q : out.noisy)
+      q.x = q.y = q.z = nan;
+    const SensorInput input{options, out.shape_index, depth, cosine, cx, cy};
+    std::mt19937_64 rng = sensorStream(options, frame);
+    if (options.noise == NoiseModel::stereo)
+      out.noisy.is_dense = applyStereo(input, rng, out.noisy);
+    else if (options.noise == NoiseModel::kinect1)
+      out.noisy.is_dense = applyKinect1(input, rng, out.noisy);
+    else
+      out.noisy.is_dense = applyTof(input, rng, out.noisy);
+    return out;
+  }
 
   // Noise: one random stream per frame, three draws per pixel in scan order whether or not the
   // pixel is hit, so changing dropouts or the scene never reshuffles the noise of other pixels.

@@ -3,12 +3,20 @@
 #include <range_nlm/eval/metrics.h>
 #include <range_nlm/eval/synthetic_scene.h>
 
+#include "test_support.h"
+
+#include <pcl/io/pcd_io.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
+#include <random>
 
 using namespace range_nlm;
 
@@ -473,4 +481,225 @@ TEST(Evaluation, TableAndJsonPrintMillimetresAndMarkMissingValues)
   EXPECT_NE(sequence_json.find("\"frame_count\": 1"), std::string::npos) << sequence_json;
   EXPECT_NE(sequence_json.find("\"name\": \"a\\\"b.pcd\""), std::string::npos) << sequence_json;
   EXPECT_NE(sequence_json.find("\"temporal_std_mm\": null"), std::string::npos) << sequence_json;
+}
+
+namespace
+{
+
+/// Organized cloud of pixels (u, v) seen with f = 100 px, principal point at the centre, at
+/// depth z(u, v) along each pixel's ray.
+Cloud
+rayCloud(int width, int height, const std::function<double(int, int)>& depth)
+{
+  Cloud c(width, height);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const double z = depth(u, v);
+      pcl::PointXYZ& p = c.at(u, v);
+      p.x = float((u - 0.5 * (width - 1)) / 100.0 * z);
+      p.y = float((v - 0.5 * (height - 1)) / 100.0 * z);
+      p.z = float(z);
+    }
+  c.is_dense = true;
+  return c;
+}
+
+} // namespace
+
+TEST(Evaluation, PlanarResidualOfANoisyPlaneIsItsNoise)
+{
+  SceneOptions o;
+  o.scene = SceneType::plane;
+  o.plane_depth = 1.5;
+  o.width = 160;
+  o.height = 120;
+  o.fx = o.fy = 131.25;
+  const SyntheticFrame raw = renderFrame(o, 0), other = renderFrame(o, 1);
+  const PlanarRegions regions = findPlanarRegions(raw.noisy);
+  ASSERT_EQ(regions.planes.size(), 1u);
+  EXPECT_EQ(regions.sizes[0], raw.noisy.size());
+  EXPECT_NEAR(std::abs(regions.planes[0][2]), 1.0, 1e-3);
+  EXPECT_NEAR(regions.planes[0][3] / -regions.planes[0][2], 1.5, 1e-3);
+  const double sigma = kinectAxialSigma(1.5);
+  // Another frame of the same plane: its own noise, about the known sigma.
+  const PlanarResidual noisy = planarResidual(regions, other.noisy);
+  EXPECT_EQ(noisy.regions, 1u);
+  EXPECT_EQ(noisy.interior_pixels, raw.noisy.size());
+  EXPECT_EQ(noisy.border_pixels, 0u) << "the image border is not a region border";
+  EXPECT_NEAR(noisy.interior_rms, sigma, 0.03 * sigma);
+  EXPECT_TRUE(std::isnan(noisy.border_rms));
+  // The exact plane has (almost) no residual: only the fit's error on the noisy raw frame.
+  Cloud exact(o.width, o.height);
+  for (std::size_t i = 0; i < exact.size(); ++i)
+    exact[i].x = raw.truth[i].x, exact[i].y = raw.truth[i].y, exact[i].z = raw.truth[i].z;
+  EXPECT_LT(planarResidual(regions, exact).interior_rms, 0.05 * sigma);
+}
+
+TEST(Evaluation, PlanarResidualReportsTheBorderBandBleedingAndLostPoints)
+{
+  // Left half at 1 m, right half at 1.3 m: two regions meeting at column 40.
+  const int width = 80, height = 60;
+  auto step = [](int u, int) { return u < 40 ? 1.0 : 1.3; };
+  const Cloud raw = rayCloud(width, height, step);
+  PlanarRegionOptions options;
+  options.min_region_pixels = 500;
+  options.border_band = 3;
+  const PlanarRegions regions = findPlanarRegions(raw, options);
+  ASSERT_EQ(regions.planes.size(), 2u);
+  EXPECT_EQ(regions.sizes[0] + regions.sizes[1], std::size_t(width * height));
+  PlanarResidual r = planarResidual(regions, raw);
+  // Three columns on each side of the step.
+  EXPECT_EQ(r.border_pixels, std::size_t(2 * 3 * height));
+  EXPECT_EQ(r.interior_pixels, std::size_t(width * height - 2 * 3 * height));
+  EXPECT_LT(r.interior_rms, 1e-6);
+  EXPECT_LT(r.border_rms, 1e-6);
+  EXPECT_EQ(r.points_lost, 0u);
+
+  // A filter that bleeds: the two columns on each side of the step move 10 cm toward the other
+  // side; five points are lost.
+  Cloud bled = rayCloud(width, height, [](int u, int v) {
+    if (u >= 38 && u < 40)
+      return 1.1;
+    if (u >= 40 && u < 42)
+      return 1.2;
+    return u < 40 ? 1.0 : 1.3 + 0.0 * v;
+  });
+  for (int k = 0; k < 5; ++k)
+    bled.at(10 + k, 10).x = bled.at(10 + k, 10).y = bled.at(10 + k, 10).z = kNaN;
+  r = planarResidual(regions, bled);
+  EXPECT_EQ(r.points_lost, 5u);
+  EXPECT_EQ(r.border_pixels, std::size_t(2 * 3 * height));
+  EXPECT_LT(r.interior_rms, 1e-6);
+  // Orthogonal distance to a fronto-parallel plane is the depth offset: 4 of 6 band columns are 10 cm off.
+  EXPECT_NEAR(r.border_rms, 0.1 * std::sqrt(4.0 / 6.0), 1e-5);
+  EXPECT_EQ(r.regions, 2u);
+
+  const std::string json = toJson(r);
+  EXPECT_NE(json.find("\"border_rms_mm\": 81.6"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"points_lost\": 5"), std::string::npos) << json;
+  EXPECT_THROW(planarResidual(regions, Cloud(width + 1, height)), std::invalid_argument);
+}
+
+TEST(Evaluation, PlanarRegionsAreFoundOnRealisticScenesAndSmallOnesDropped)
+{
+  // On the boxes scene the floor and the back wall are the largest planes.
+  SceneOptions o;
+  o.noise = NoiseModel::kinect;
+  const SyntheticFrame f = renderFrame(o, 0);
+  const PlanarRegions regions = findPlanarRegions(f.noisy);
+  ASSERT_GE(regions.planes.size(), 2u);
+  for (std::size_t size : regions.sizes)
+    EXPECT_GE(size, 2000u);
+  // Each region lies on one shape of the scene, but for the strips within the noise of a crease
+  // or contact (wall, box and cylinder bottoms on the floor, a few rows at 2-3 m).
+  std::vector<std::map<int, std::size_t>> shapes(regions.planes.size());
+  for (std::size_t i = 0; i < f.noisy.size(); ++i)
+    if (regions.label[i] >= 0)
+      ++shapes[std::size_t(regions.label[i])][f.shape_index[i]];
+  for (const auto& s : shapes) {
+    std::size_t total = 0, largest = 0;
+    for (const auto& [shape, count] : s) {
+      total += count;
+      largest = std::max(largest, count);
+    }
+    EXPECT_GT(double(largest), 0.95 * double(total));
+  }
+  PlanarRegionOptions big;
+  big.min_region_pixels = 1 << 20;
+  EXPECT_TRUE(findPlanarRegions(f.noisy, big).planes.empty());
+  const PlanarResidual none = planarResidual(findPlanarRegions(f.noisy, big), f.noisy);
+  EXPECT_TRUE(std::isnan(none.interior_rms));
+  EXPECT_NE(toJson(none).find("\"interior_rms_mm\": null"), std::string::npos) << toJson(none);
+
+  PlanarRegionOptions bad;
+  bad.border_band = -1;
+  try {
+    findPlanarRegions(f.noisy, bad);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("border_band = -1"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Evaluation, JitterOfAStaticSequenceIsItsPerFrameNoise)
+{
+  const int width = 40, height = 30, frames = 20;
+  const double sigma = 0.002;
+  const Cloud base = rayCloud(width, height, [](int u, int v) { return 2.0 + 0.001 * (u + v); });
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, sigma);
+  JitterEvaluator evaluator;
+  std::vector<Cloud> all;
+  for (int k = 0; k < frames; ++k) {
+    Cloud f = base;
+    for (auto& p : f) {
+      // Range noise: move along the ray by a N(0, sigma) change of |p|.
+      const double r = std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z);
+      const double s = (r + normal(rng)) / r;
+      p.x = float(p.x * s), p.y = float(p.y * s), p.z = float(p.z * s);
+    }
+    if (k == 7)
+      f.at(3, 4).x = f.at(3, 4).y = f.at(3, 4).z = kNaN;
+    evaluator.add(f);
+    all.push_back(f);
+  }
+  const TemporalJitter j = evaluator.jitter();
+  EXPECT_EQ(j.frames, std::size_t(frames));
+  EXPECT_EQ(j.pixels, std::size_t(width * height - 1)) << "pixels valid in every frame";
+  // E[s] = c4(20) sigma = 0.9869 sigma; median of s = sigma * sqrt(chi2_19 median / 19) ~ 0.9826 sigma.
+  EXPECT_NEAR(j.mean, 0.9869 * sigma, 0.02 * sigma);
+  EXPECT_NEAR(j.median, 0.9826 * sigma, 0.025 * sigma);
+  const TemporalJitter whole = temporalJitter(all);
+  EXPECT_EQ(whole.mean, j.mean);
+  EXPECT_EQ(whole.median, j.median);
+  // Identical frames do not jitter; one frame has no jitter to measure.
+  EXPECT_EQ(temporalJitter({base, base, base}).mean, 0.0);
+  EXPECT_TRUE(std::isnan(temporalJitter({base}).median));
+  EXPECT_NE(toJson(temporalJitter({base})).find("\"mean_jitter_mm\": null"), std::string::npos);
+  EXPECT_NE(toJson(j).find("\"frames\": 20"), std::string::npos) << toJson(j);
+  JitterEvaluator mismatched;
+  mismatched.add(base);
+  EXPECT_THROW(mismatched.add(Cloud(width, height + 1)), std::invalid_argument);
+}
+
+TEST(Evaluation, ToolScoresRealFramesWithoutGroundTruth)
+{
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("range_nlm_eval_real_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "sequence");
+  const int width = 80, height = 60;
+  const Cloud raw = rayCloud(width, height, [](int u, int) { return u < 40 ? 1.0 : 1.3; });
+  Cloud bled = rayCloud(width, height, [](int u, int) { return u < 38 ? 1.0 : u < 40 ? 1.1 : u < 42 ? 1.2 : 1.3; });
+  for (int k = 0; k < 5; ++k)
+    bled.at(10 + k, 10).x = bled.at(10 + k, 10).y = bled.at(10 + k, 10).z = kNaN;
+  ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "raw.pcd").string(), raw), 0);
+  ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "bled.pcd").string(), bled), 0);
+  for (int k = 0; k < 3; ++k)
+    ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "sequence" / ("f" + std::to_string(k) + ".pcd")).string(),
+                                         k == 1 ? bled : raw),
+              0);
+
+  test::CommandResult r = test::runTool("range_nlm_eval", "--raw " + (dir / "raw.pcd").string() + " " +
+                                                              (dir / "bled.pcd").string() + " --min-region 500 --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  // The raw frame first (no residual), then the bled one.
+  EXPECT_NE(r.output.find("\"border_pixels\": 360, \"points_lost\": 0}"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"border_rms_mm\": 81.6"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"points_lost\": 5}"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"regions\": 2"), std::string::npos) << r.output;
+
+  r = test::runTool("range_nlm_eval", "--jitter " + (dir / "sequence").string() + " --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  // Pixels valid in all three frames; only the four bled columns move (by 10 cm twice).
+  EXPECT_NE(r.output.find("\"frames\": 3, \"pixels\": 4795"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"median_jitter_mm\": 0}"), std::string::npos) << r.output;
+
+  r = test::runTool("range_nlm_eval", "--raw " + (dir / "raw.pcd").string() + " --border-band -1");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("border_band = -1"), std::string::npos) << r.output;
+  r = test::runTool("range_nlm_eval", "--raw " + (dir / "raw.pcd").string() + " " + (dir / "none.pcd").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("none.pcd"), std::string::npos) << r.output;
+  fs::remove_all(dir);
 }

@@ -2,11 +2,19 @@
 // dropouts and motion.
 #include <range_nlm/eval/synthetic_scene.h>
 
+#include "test_support.h"
+
+#include <pcl/io/pcd_io.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <filesystem>
+#include <limits>
 #include <map>
 #include <numeric>
 
@@ -447,4 +455,410 @@ TEST(SyntheticScene, InvalidOptionsThrowNamingTheOption)
   EXPECT_EQ(noiseModelFromString("stripes"), NoiseModel::stripes);
   EXPECT_EQ(motionFromString("moving"), Motion::moving_box);
   EXPECT_EQ(sceneTypeFromString("plane"), SceneType::plane);
+}
+
+namespace
+{
+
+/// FNV-1a over the bytes of the noisy frame (x, y, z of every point, NaN bits included).
+std::uint64_t
+noisyHash(const pcl::PointCloud<pcl::PointXYZ>& cloud)
+{
+  std::uint64_t h = 1469598103934665603ull;
+  for (const auto& p : cloud) {
+    const float xyz[3] = {p.x, p.y, p.z};
+    unsigned char bytes[sizeof xyz];
+    std::memcpy(bytes, xyz, sizeof xyz);
+    for (unsigned char b : bytes)
+      h = (h ^ b) * 1099511628211ull;
+  }
+  return h;
+}
+
+} // namespace
+
+TEST(SyntheticScene, ExistingNoiseModelsKeepTheirExactOutput)
+{
+  // Frames of the models that existed before the sensor models were added, hashed when they were
+  // added: their random draws and arithmetic must not change.
+  const std::pair<NoiseModel, std::uint64_t> expected[] = {
+      {NoiseModel::none, 17698375432554255019ull}, {NoiseModel::kinect, 9104118400696139820ull},
+      {NoiseModel::laser, 5241634585731123694ull}, {NoiseModel::stripes, 6378388060979735317ull}};
+  for (const auto& [model, hash] : expected) {
+    SceneOptions o;
+    o.width = 160;
+    o.height = 120;
+    o.fx = o.fy = 131.25;
+    o.noise = model;
+    o.dropout = 0.02;
+    o.grazing_dropout = 80.0;
+    o.seed = 11;
+    EXPECT_EQ(noisyHash(renderFrame(o, 1).noisy), hash) << toString(model);
+  }
+}
+
+namespace
+{
+
+/// Disparity f B / z of every valid noisy pixel, NaN elsewhere.
+std::vector<double>
+disparities(const SyntheticFrame& f, double fb)
+{
+  std::vector<double> d(f.noisy.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (valid(f.noisy[i]))
+      d[i] = fb / double(f.noisy[i].z);
+  return d;
+}
+
+/// Sample autocorrelation of a (NaN-free) field along rows and columns at a lag of `lag` pixels,
+/// each value centred on the field's mean and divided by its variance.
+double
+autocorrelation(const std::vector<double>& e, int width, int height, int lag)
+{
+  double mean = 0.0;
+  for (double x : e)
+    mean += x;
+  mean /= double(e.size());
+  double var = 0.0;
+  for (double x : e)
+    var += (x - mean) * (x - mean);
+  var /= double(e.size());
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const double a = e[std::size_t(v) * width + u] - mean;
+      if (u + lag < width) {
+        sum += a * (e[std::size_t(v) * width + u + lag] - mean);
+        ++n;
+      }
+      if (v + lag < height) {
+        sum += a * (e[std::size_t(v + lag) * width + u] - mean);
+        ++n;
+      }
+    }
+  return sum / double(n) / var;
+}
+
+/// Whether x is a whole multiple of step, to `tolerance` of a step.
+bool
+multipleOf(double x, double step, double tolerance = 1e-3)
+{
+  return std::abs(x / step - std::round(x / step)) < tolerance;
+}
+
+} // namespace
+
+TEST(SyntheticScene, StereoErrorHasTheRequestedCorrelationLengthAndShare)
+{
+  SceneOptions o = planeOptions(1.5, NoiseModel::stereo);
+  o.width = 320;
+  o.height = 240;
+  o.stereo_subpixel = 0.0;
+  const double fb = o.fx * o.stereo_baseline;
+  for (const auto& [share, length] : {std::pair<double, double>{1.0, 4.0}, {0.6, 4.0}, {0.6, 8.0}, {0.0, 4.0}}) {
+    o.stereo_correlated_share = share;
+    o.stereo_correlation_length = length;
+    double rho_l = 0.0, rho_half = 0.0, variance = 0.0;
+    const int frames = 4;
+    for (int k = 0; k < frames; ++k) {
+      const SyntheticFrame f = renderFrame(o, k);
+      std::vector<double> e = disparities(f, fb);
+      double sq = 0.0;
+      for (double& x : e) {
+        ASSERT_TRUE(std::isfinite(x));
+        x -= fb / 1.5;
+        sq += x * x;
+      }
+      variance += sq / double(e.size()) / frames;
+      rho_l += autocorrelation(e, o.width, o.height, int(length)) / frames;
+      rho_half += autocorrelation(e, o.width, o.height, int(length / 2)) / frames;
+    }
+    // White part uncorrelated at any lag > 0; correlated part exp(-(lag / L)^2).
+    EXPECT_NEAR(rho_l, share * std::exp(-1.0), 0.05) << share << " " << length;
+    EXPECT_NEAR(rho_half, share * std::exp(-0.25), 0.05) << share << " " << length;
+    EXPECT_NEAR(std::sqrt(variance), o.stereo_disparity_sigma, 0.1 * o.stereo_disparity_sigma);
+  }
+}
+
+TEST(SyntheticScene, StereoDisparityIsQuantizedAndDepthErrorGrowsWithZSquared)
+{
+  SceneOptions o = planeOptions(1.0, NoiseModel::stereo);
+  o.width = 320;
+  o.height = 240;
+  const double fb = o.fx * o.stereo_baseline;
+  double stddev[2];
+  for (int p = 0; p < 2; ++p) {
+    o.plane_depth = p == 0 ? 1.0 : 2.0;
+    double sum_sq = 0.0;
+    std::size_t count = 0, odd = 0;
+    for (int k = 0; k < 3; ++k) {
+      const SyntheticFrame f = renderFrame(o, k);
+      for (double d : disparities(f, fb)) {
+        ASSERT_TRUE(std::isfinite(d));
+        ASSERT_TRUE(multipleOf(d, 1.0 / 32.0)) << d;
+        odd += !multipleOf(d, 1.0 / 16.0);
+      }
+      double mean, sd;
+      std::size_t n;
+      depthErrorStatistics(f, o.plane_depth, mean, sd, n);
+      sum_sq += sd * sd * double(n);
+      count += n;
+    }
+    EXPECT_GT(odd, count / 4) << "the step is 1/32 px, not coarser";
+    stddev[p] = std::sqrt(sum_sq / double(count));
+    // dz = z^2 / (f B) * dd.
+    EXPECT_NEAR(stddev[p], o.plane_depth * o.plane_depth / fb * 0.08, 0.1 * stddev[p]) << o.plane_depth;
+  }
+  EXPECT_NEAR(stddev[1] / stddev[0], 4.0, 0.4);
+
+  o.stereo_subpixel = 0.1;
+  for (double d : disparities(renderFrame(o), fb))
+    ASSERT_TRUE(multipleOf(d, 0.1)) << d;
+}
+
+TEST(SyntheticScene, Kinect1DisparityAndDepthAreQuantized)
+{
+  SceneOptions o = planeOptions(2.6, NoiseModel::kinect1);
+  o.width = 200;
+  o.height = 150;
+  const double fb = o.fx * o.kinect1_baseline;
+  // Without the depth rounding the disparity is a multiple of 1/8 px.
+  o.kinect1_depth_unit = 0.0;
+  std::size_t n = 0, inner = 0;
+  const std::vector<double> d = disparities(renderFrame(o), fb);
+  for (int v = 0; v < o.height; ++v)
+    for (int u = 0; u < o.width; ++u) {
+      const double x = d[std::size_t(v) * o.width + u];
+      if (std::isfinite(x)) {
+        ++n;
+        ASSERT_TRUE(multipleOf(x, 0.125)) << x;
+      }
+      // A block touching the image border has no measurement; beyond a few shift sigmas a
+      // fronto-parallel plane is measured everywhere.
+      if (u < 4 || v < 4 || u + 4 >= o.width || v + 4 >= o.height)
+        ASSERT_FALSE(std::isfinite(x)) << u << " " << v;
+      else if (u >= 8 && v >= 8 && u + 8 < o.width && v + 8 < o.height)
+        inner += std::isfinite(x);
+    }
+  EXPECT_EQ(inner, std::size_t(o.width - 16) * (o.height - 16));
+  // With it, depth is a multiple of 1 mm, on a few bands only (1/8 px at 2.6 m is ~2 cm; the
+  // 1/6 px disparity noise spreads over about +-4 steps).
+  o.kinect1_depth_unit = 0.001;
+  std::map<long, std::size_t> bands;
+  for (const auto& p : renderFrame(o).noisy)
+    if (valid(p)) {
+      ASSERT_TRUE(multipleOf(p.z, 0.001, 1e-2)) << p.z;
+      ++bands[std::lround(p.z * 1000.0)];
+    }
+  EXPECT_LE(bands.size(), 16u);
+  EXPECT_GE(bands.size(), 2u);
+  for (const auto& [mm, count] : bands) {
+    (void)count;
+    EXPECT_TRUE(multipleOf(fb / (mm * 0.001), 0.125, 0.05)) << mm << " mm is not the depth of a 1/8 px disparity";
+  }
+}
+
+TEST(SyntheticScene, Kinect1HasNoMeasurementWhereABlockStraddlesADepthEdge)
+{
+  SceneOptions o;
+  o.noise = NoiseModel::kinect1;
+  const SyntheticFrame f = renderFrame(o, 0);
+  SceneOptions none = o;
+  none.noise = NoiseModel::none;
+  const SyntheticFrame exact = renderFrame(none, 0);
+  EXPECT_TRUE(identical(f.truth, exact.truth)) << "the truth stays the exact scene";
+  // Edge: a 3x3 neighbour without a surface or whose true disparity differs by more than 4 px
+  // (simkinect's distance weighting lets some jumps of one to three pixels through).
+  const double fb = o.fx * o.kinect1_baseline;
+  auto disparity = [&](int u, int v) { return fb / double(f.truth.at(u, v).z); };
+  std::size_t edge = 0, edge_valid = 0, hit = 0, hit_valid = 0;
+  for (int v = 1; v + 1 < o.height; ++v)
+    for (int u = 1; u + 1 < o.width; ++u) {
+      if (!valid(f.truth.at(u, v)))
+        continue;
+      ++hit;
+      hit_valid += valid(f.noisy.at(u, v));
+      bool at_edge = false;
+      for (int dv = -1; dv <= 1; ++dv)
+        for (int du = -1; du <= 1; ++du)
+          at_edge = at_edge || !valid(f.truth.at(u + du, v + dv)) ||
+                    std::abs(disparity(u + du, v + dv) - disparity(u, v)) > 4.0;
+      if (at_edge) {
+        ++edge;
+        edge_valid += valid(f.noisy.at(u, v));
+        EXPECT_FALSE(valid(f.noisy.at(u, v))) << u << " " << v;
+      }
+    }
+  EXPECT_GT(edge, 1500u);
+  EXPECT_EQ(edge_valid, 0u);
+  // Away from edges most of the scene is measured (floor, walls and faces are not too slanted).
+  EXPECT_GT(hit_valid, hit * 3 / 4);
+  // Reproducible per seed and frame, fresh per frame.
+  EXPECT_TRUE(identical(renderFrame(o, 0).noisy, f.noisy));
+  EXPECT_FALSE(identical(renderFrame(o, 1).noisy, f.noisy));
+}
+
+TEST(SyntheticScene, TofMixedPixelsLieBetweenTheTwoSurfacesOnTheirRay)
+{
+  SceneOptions o;
+  o.noise = NoiseModel::tof;
+  o.tof_sigma = 0.0;
+  o.tof_sigma_slope = 0.0;
+  o.tof_mixed_probability = 1.0;
+  o.tof_edge_band = 1;
+  const SyntheticFrame f = renderFrame(o, 0);
+  const double cx = o.principalX(), cy = o.principalY();
+  auto range = [](const auto& p) { return std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z); };
+  std::size_t mixed = 0, between = 0, far_from_truth = 0;
+  for (int v = 0; v < o.height; ++v)
+    for (int u = 0; u < o.width; ++u) {
+      const auto& q = f.noisy.at(u, v);
+      const auto& t = f.truth.at(u, v);
+      ASSERT_EQ(valid(q), valid(t));
+      if (!valid(q))
+        continue;
+      // On the pixel's ray.
+      EXPECT_NEAR(q.x / q.z, (u - cx) / o.fx, 1e-5);
+      EXPECT_NEAR(q.y / q.z, (v - cy) / o.fy, 1e-5);
+      const double r = range(q);
+      if (std::abs(r - range(t)) < 1e-5)
+        continue;
+      ++mixed;
+      double r_near = 1e9, r_far = 0.0;
+      for (int dv = -1; dv <= 1; ++dv)
+        for (int du = -1; du <= 1; ++du) {
+          if (u + du < 0 || v + dv < 0 || u + du >= o.width || v + dv >= o.height || !valid(f.truth.at(u + du, v + dv)))
+            continue;
+          r_near = std::min(r_near, range(f.truth.at(u + du, v + dv)));
+          r_far = std::max(r_far, range(f.truth.at(u + du, v + dv)));
+        }
+      between += r >= r_near - 1e-5 && r <= r_far + 1e-5;
+      far_from_truth += std::abs(r - range(t)) > 0.05;
+    }
+  EXPECT_GT(mixed, 2000u);
+  EXPECT_EQ(between, mixed) << "every moved pixel lies between the nearest and farthest surface of its 3x3 window";
+  EXPECT_GT(far_from_truth, mixed / 4) << "mixed pixels float between the surfaces";
+
+  o.tof_mixed_probability = 0.0;
+  const SyntheticFrame clean = renderFrame(o, 0);
+  for (std::size_t i = 0; i < clean.noisy.size(); ++i)
+    if (valid(clean.noisy[i]))
+      ASSERT_NEAR(clean.noisy[i].z, f.truth[i].z, 1e-6);
+  o.tof_mixed_probability = 0.5;
+  std::size_t half_mixed = 0;
+  const SyntheticFrame some = renderFrame(o, 0);
+  for (std::size_t i = 0; i < some.noisy.size(); ++i)
+    half_mixed += valid(some.noisy[i]) && std::abs(some.noisy[i].z - f.truth[i].z) > 1e-5;
+  EXPECT_NEAR(double(half_mixed) / double(mixed), 0.5, 0.05);
+}
+
+TEST(SyntheticScene, TofRangeNoiseGrowsWithRange)
+{
+  SceneOptions o = planeOptions(1.0, NoiseModel::tof);
+  o.width = 64;
+  o.height = 48;
+  o.frames = 1;
+  for (double depth : {1.0, 3.0}) {
+    o.plane_depth = depth;
+    double sum_sq = 0.0;
+    std::size_t count = 0;
+    for (int k = 0; k < 8; ++k) {
+      double mean, sd;
+      std::size_t n;
+      depthErrorStatistics(renderFrame(o, k), depth, mean, sd, n);
+      sum_sq += sd * sd * double(n);
+      count += n;
+    }
+    // The narrow field of view makes range and depth equal to 0.3 %.
+    EXPECT_NEAR(std::sqrt(sum_sq / double(count)), o.tof_sigma + o.tof_sigma_slope * depth,
+                0.05 * (o.tof_sigma + o.tof_sigma_slope * depth))
+        << depth;
+  }
+}
+
+TEST(SyntheticScene, SensorModelOptionsAreValidatedByName)
+{
+  auto message = [](const SceneOptions& o) {
+    try {
+      o.validate();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  SceneOptions o;
+  o.stereo_correlated_share = 1.5;
+  EXPECT_NE(message(o).find("stereo_correlated_share = 1.5"), std::string::npos) << message(o);
+  o = SceneOptions{};
+  o.stereo_baseline = 0.0;
+  EXPECT_NE(message(o).find("stereo_baseline = 0"), std::string::npos) << message(o);
+  o = SceneOptions{};
+  o.kinect1_block = 8;
+  EXPECT_NE(message(o).find("kinect1_block = 8"), std::string::npos) << message(o);
+  o = SceneOptions{};
+  o.kinect1_subpixel = -0.125;
+  EXPECT_NE(message(o).find("kinect1_subpixel = -0.125"), std::string::npos) << message(o);
+  o = SceneOptions{};
+  o.tof_mixed_probability = -0.1;
+  EXPECT_NE(message(o).find("tof_mixed_probability = -0.1"), std::string::npos) << message(o);
+  o = SceneOptions{};
+  o.tof_edge_band = 17;
+  EXPECT_NE(message(o).find("tof_edge_band = 17"), std::string::npos) << message(o);
+  EXPECT_EQ(noiseModelFromString("stereo"), NoiseModel::stereo);
+  EXPECT_EQ(noiseModelFromString("kinect1"), NoiseModel::kinect1);
+  EXPECT_EQ(noiseModelFromString("tof"), NoiseModel::tof);
+  EXPECT_EQ(toString(NoiseModel::kinect1), "kinect1");
+}
+
+TEST(SyntheticScene, ToolTakesTheSensorModelOptionsAndNamesABadValue)
+{
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("range_nlm_synth_sensor_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  test::CommandResult r =
+      test::runTool("range_nlm_synth", "--output-dir " + dir.string() +
+                                           " --scene plane --width 64 --height 48 --noise stereo --stereo-subpixel 0.25 -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  pcl::PointCloud<pcl::PointXYZ> noisy;
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "noisy" / "frame_0000.pcd").string(), noisy), 0);
+  SceneOptions o = planeOptions(1.5, NoiseModel::stereo);
+  o.width = 64;
+  o.height = 48;
+  o.stereo_subpixel = 0.25;
+  EXPECT_TRUE(identical(noisy, renderFrame(o).noisy)) << "the tool writes the library's frame";
+  r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --noise kinect1 --kinect1-block 8");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("kinect1_block = 8"), std::string::npos) << r.output;
+  r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --noise tof --tof-mixed-probability 2");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("tof_mixed_probability = 2"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(SyntheticScene, SensorModelsAreReproducibleFromTheSeedAndFreshPerFrame)
+{
+  for (NoiseModel model : {NoiseModel::stereo, NoiseModel::kinect1, NoiseModel::tof}) {
+    SceneOptions o;
+    o.width = 160;
+    o.height = 120;
+    o.fx = o.fy = 131.25;
+    o.noise = model;
+    o.seed = 3;
+    o.frames = 2;
+    const auto sequence = renderSequence(o);
+    EXPECT_TRUE(identical(renderFrame(o, 1).noisy, sequence[1].noisy)) << toString(model);
+    EXPECT_FALSE(identical(sequence[0].noisy, sequence[1].noisy)) << toString(model);
+    o.seed = 4;
+    EXPECT_FALSE(identical(renderFrame(o, 1).noisy, sequence[1].noisy)) << toString(model);
+    // Dropouts apply to the sensor models too.
+    o.dropout = 0.5;
+    std::size_t valid_before = 0, valid_after = 0;
+    for (const auto& p : sequence[1].noisy)
+      valid_before += valid(p);
+    for (const auto& p : renderFrame(o, 1).noisy)
+      valid_after += valid(p);
+    EXPECT_NEAR(double(valid_after), 0.5 * double(valid_before), 0.05 * double(valid_before)) << toString(model);
+  }
 }

@@ -1,7 +1,9 @@
 /// \file evaluation.h
 /// \brief Accuracy of a filtered organized range frame (or sequence) against exact ground truth:
 /// point-to-plane RMSE and normal error in flat and feature regions, lost points, temporal
-/// flicker of static surfaces and the error at the edges of moving objects.
+/// flicker of static surfaces and the error at the edges of moving objects. For real frames,
+/// without ground truth: residuals to planes found in the raw frame, and the temporal jitter of
+/// a static sequence.
 ///
 /// Ground truth is a pcl::PointNormal cloud (exact points and unit normals, NaN where invalid),
 /// as written by range_nlm_synth. The residual of pixel i is r_i = (p_result - p_truth) . n_truth,
@@ -12,6 +14,8 @@
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+
+#include <Eigen/Core>
 
 #include <cstddef>
 #include <string>
@@ -168,5 +172,113 @@ toJson(const FrameMetrics& metrics);
 /// an array of per-frame objects, each with "name" taken from `frame_names` when given.
 std::string
 toJson(const SequenceMetrics& metrics, const std::vector<std::string>& frame_names = {});
+
+/// How planar regions are found in a raw frame (findPlanarRegions).
+struct PlanarRegionOptions
+{
+  /// Smallest region kept, pixels. >= 3, default 2000.
+  int min_region_pixels = 2000;
+  /// Width of the border band of a region, pixels: region pixels within this Chebyshev distance
+  /// of a pixel (inside the image) outside the region. >= 0, default 3.
+  int border_band = 3;
+  /// Side of the square blocks whose plane fits seed the regions, pixels. >= 3, default 8.
+  int block_size = 8;
+  /// Largest distance of a point from its region's plane at a depth of 1 m, metres; scaled by
+  /// z^2 (z in metres) because depth-camera error grows with z^2. A seed block's RMS residual
+  /// must be below a third of it. > 0, default 0.01.
+  double plane_distance = 0.01;
+
+  /// Throws std::invalid_argument naming the first invalid option and its value.
+  void validate() const;
+};
+
+/// Large planar regions of an organized frame.
+struct PlanarRegions
+{
+  int width = 0, height = 0;
+  /// Region of each pixel (index into planes), -1 for none.
+  std::vector<int> label;
+  /// 1 where a region pixel lies in its region's border band.
+  std::vector<unsigned char> border;
+  /// Plane of each region, fitted (least squares, orthogonal) on the raw region's points:
+  /// n . p + d = 0 with |n| = 1, as (n_x, n_y, n_z, d).
+  std::vector<Eigen::Vector4d> planes;
+  /// Pixels of each region.
+  std::vector<std::size_t> sizes;
+};
+
+/// Finds planar regions in a raw frame, deterministically: the valid pixels are split into blocks
+/// of block_size^2; each block whose points all are valid and whose plane fit has an RMS
+/// residual below plane_distance(z) / 3 is a seed; seeds are taken in order of increasing
+/// residual (then scan order), and each grows over 4-connected unlabelled valid pixels within
+/// plane_distance(z) of the region's plane (refitted whenever the region has doubled) for which
+/// the median distance of their valid 3x3 neighbours (at least 4) is within plane_distance(z) / 3
+/// (regions stop at creases, yet pixels beside a depth edge join). Regions
+/// with fewer than min_region_pixels pixels, or whose final fit has an RMS residual of a third
+/// of the tolerance at their mean depth or more, are dropped (their pixels may join later
+/// regions but seed none). Seeds and regions whose plane is seen at more than 75 degrees from its normal are
+/// not used: such a plane nearly contains the lines of sight and fits a strip at any depths.
+/// Throws std::invalid_argument if the cloud is not organized or the options are invalid.
+PlanarRegions
+findPlanarRegions(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionOptions& options = {});
+
+/// Residuals of a frame to the planes of the raw frame's regions.
+struct PlanarResidual
+{
+  /// Regions the residuals are measured over.
+  std::size_t regions = 0;
+  /// RMS orthogonal distance to the region's plane over the interior (not border band) pixels
+  /// valid in the frame, metres; NaN over none.
+  double interior_rms = 0.0;
+  /// The same over the border band pixels: bleeding across the regions' borders shows here.
+  double border_rms = 0.0;
+  std::size_t interior_pixels = 0;
+  std::size_t border_pixels = 0;
+  /// Region pixels (all valid in the raw frame) that are NaN in the frame.
+  std::size_t points_lost = 0;
+};
+
+/// Residuals of `frame` (same size as the raw frame the regions came from) to their planes.
+/// Throws std::invalid_argument if the sizes differ.
+PlanarResidual
+planarResidual(const PlanarRegions& regions, const pcl::PointCloud<pcl::PointXYZ>& frame);
+
+/// Temporal jitter of a static sequence: the per-pixel sample standard deviation (n - 1) of the
+/// range |p| over the frames, at pixels valid in every frame.
+struct TemporalJitter
+{
+  std::size_t frames = 0;
+  std::size_t pixels = 0;
+  /// Mean and median over those pixels, metres; NaN with fewer than two frames or no pixel.
+  double mean = 0.0;
+  double median = 0.0;
+};
+
+/// Accumulates the jitter frame by frame (per-pixel Welford sums only).
+class JitterEvaluator
+{
+public:
+  /// Adds the next frame; all frames must have the first frame's size (std::invalid_argument
+  /// naming the frame otherwise) and be organized.
+  void add(const pcl::PointCloud<pcl::PointXYZ>& frame);
+  TemporalJitter jitter() const;
+
+private:
+  int width_ = 0, height_ = 0;
+  std::size_t frames_ = 0;
+  std::vector<double> mean_, m2_;
+  std::vector<unsigned char> valid_;
+};
+
+/// Convenience: the jitter of a whole sequence.
+TemporalJitter
+temporalJitter(const std::vector<pcl::PointCloud<pcl::PointXYZ>>& frames);
+
+/// JSON object: regions, interior / border RMS in mm, pixel counts, points lost; NaN is null.
+std::string
+toJson(const PlanarResidual& residual);
+/// JSON object: frames, pixels, mean / median jitter in mm; NaN is null.
+std::string
+toJson(const TemporalJitter& jitter);
 
 } // namespace range_nlm

@@ -43,7 +43,54 @@ enum class NoiseModel
   laser,
   /// Structured-light stripe artefacts: e = A sin(2 pi u / period + phase_k) + N(0, sigma(z)),
   /// a sinusoid along the image columns u whose phase_k is drawn per frame; default scale 0.25.
-  stripes
+  stripes,
+  /// Active stereo (Intel RealSense D4xx-like). Depth comes from a disparity d = f B / z (f = fx,
+  /// B = stereo_baseline); the measured disparity is
+  ///     d' = q(d + scale * stereo_disparity_sigma * n),  n = sqrt(1 - c) w + sqrt(c) g,
+  /// with w white N(0, 1) per pixel, g a fresh N(0, 1) field per frame made of white noise blurred
+  /// by a Gaussian (sigma = stereo_correlation_length / 2 px) and renormalised to unit variance,
+  /// so its autocorrelation is exp(-(lag / stereo_correlation_length)^2); c =
+  /// stereo_correlated_share; q rounds to multiples of stereo_subpixel. Then z' = f B / d', so
+  /// the depth error is dz ~= z^2 / (f B) * dd and grows with z^2. Sources: Intel, "Tuning depth
+  /// cameras for best performance" (RealSense D400 white paper): depth RMS error = z^2 *
+  /// subpixel / (f * baseline), subpixel RMS ~0.08 px for a well-textured scene, D435 baseline
+  /// 50 mm; Keselman et al., "Intel RealSense Stereoscopic Depth Cameras", CVPR Workshops 2017
+  /// (z^2 error growth, sub-pixel disparity estimation). Blob-like, frame-to-frame changing error
+  /// as measured on the D435 frames of this project. No quantization of the depth itself.
+  stereo,
+  /// Structured light (Kinect v1 / Xtion) after Handa, Whelan, McDonald, Davison, "A Benchmark
+  /// for RGB-D Visual Odometry, 3D Reconstruction and SLAM", ICRA 2014 (ICL-NUIM; the simkinect
+  /// model, github.com/ankurhanda/simkinect): the disparity d = f B / z (B = kinect1_baseline) is
+  /// bilinearly sampled at pixel positions shifted by N(0, kinect1_shift_sigma) px in u and v;
+  /// a 9x9 block (kinect1_block) is matched against a fixed pseudo-random dot pattern: with m the
+  /// mean disparity over the dots of the block, a dot at squared radius r^2 from the centre is an
+  /// inlier if |d_dot - m| / (1.44 max(r^2, 1)) < kinect1_block_threshold (simkinect's weights
+  /// and 0.1 px), and the pixel is measured only if more than 1/1.2 of the dots are inliers; a
+  /// dot without a surface (or whose shifted sample leaves the image) fails the block. So a block
+  /// straddling a depth edge, the image border or a pixel without a surface gives no measurement
+  /// (NaN). Then disparity noise N(0, scale *
+  /// kinect1_disparity_sigma), quantization to kinect1_subpixel (1/8 px), z' = f B / d', rounded
+  /// to kinect1_depth_unit (1 mm): banding. Where this differs from simkinect: simkinect
+  /// quantizes before the block test and again after the noise, averages over all pixels of the
+  /// block (not only the dots), tolerates up to 1/6 of the dots without a surface, measures only
+  /// pixels on a dot and copies their value to the neighbours within 3 px; and its N(0, 1/6)
+  /// noise is in units of 35130 / depth_cm, about 0.1 px at its f = 480 px, so about 0.017 px.
+  /// The default here, 0.05 px, makes the total axial error with the 1/8 px quantization about
+  /// the Kinect v1 axial sigma of Nguyen, Izadi and Lovell (3DIMPVT 2012), 1.2 mm + 1.9 mm *
+  /// (z - 0.4 m)^2, at 1-2 m (the kinect model).
+  kinect1,
+  /// Time of flight (Kinect v2 / Azure Kinect-like): range noise N(0, scale * (tof_sigma +
+  /// tof_sigma_slope * r)) along the ray, r the range in metres; and mixed ("flying") pixels: a
+  /// pixel within tof_edge_band px (Chebyshev) of a depth discontinuity (two hit pixels whose
+  /// ranges differ by more than tof_edge_jump of the smaller) becomes, with probability
+  /// tof_mixed_probability, a point on its own ray at range (1 - a) r_near + a r_far, a ~ U(0, 1),
+  /// r_near and r_far the smallest and largest truth range in its (2 band + 1)^2 window: light
+  /// from foreground and background mixed in one pixel. No quantization. Sources: Sabov and
+  /// Krueger, "Identification and correction of flying pixels in range camera data", SCCG 2008;
+  /// Reynolds et al., "Capturing Time-of-Flight data with confidence", CVPR 2011; Toelgyessy et
+  /// al., "Evaluation of the Azure Kinect and Its Comparison to Kinect V1 and Kinect V2",
+  /// Sensors 21(2), 2021 (noise growing with distance, a few mm at 1-3 m).
+  tof
 };
 
 /// Motion of the sequence.
@@ -58,7 +105,8 @@ enum class Motion
 /// Parses "boxes" / "plane"; throws std::invalid_argument naming the value otherwise.
 SceneType
 sceneTypeFromString(const std::string& name);
-/// Parses "none" / "kinect" / "laser" / "stripes"; throws std::invalid_argument otherwise.
+/// Parses "none" / "kinect" / "laser" / "stripes" / "stereo" / "kinect1" / "tof"; throws
+/// std::invalid_argument otherwise.
 NoiseModel
 noiseModelFromString(const std::string& name);
 /// Parses "static" / "moving"; throws std::invalid_argument otherwise.
@@ -97,12 +145,57 @@ struct SceneOptions
 
   /// Noise model. Default kinect.
   NoiseModel noise = NoiseModel::kinect;
-  /// Factor on sigma(z). >= 0. Default: 1 for kinect, 0.25 for laser and stripes.
+  /// Factor on sigma(z). >= 0. Default: 1 for kinect, 0.25 for laser and stripes. For stereo,
+  /// kinect1 and tof a factor (default 1) on their random error: the disparity noise sigma of
+  /// stereo and kinect1 (not the pixel shifts), the range sigma of tof.
   std::optional<double> noise_scale;
   /// Amplitude A of the stripe artefact, metres. >= 0, default 0.002.
   double stripe_amplitude = 0.002;
   /// Period of the stripe artefact along the columns, pixels. > 0, default 16.
   double stripe_period = 16.0;
+
+  /// stereo: baseline B, metres. > 0, default 0.05 (RealSense D435).
+  double stereo_baseline = 0.05;
+  /// stereo: standard deviation of the disparity error, pixels. >= 0, default 0.08 (Intel's
+  /// typical subpixel RMS of the D400 series).
+  double stereo_disparity_sigma = 0.08;
+  /// stereo: share c of the disparity error variance that is spatially correlated. In [0, 1],
+  /// default 0.8.
+  double stereo_correlated_share = 0.8;
+  /// stereo: correlation length L of the correlated part, pixels: its autocorrelation at a lag of
+  /// l pixels is exp(-(l / L)^2). In [0, 64], default 4 (0: white, like the rest).
+  double stereo_correlation_length = 4.0;
+  /// stereo: disparity quantization step, pixels. >= 0, default 1/32 (0 = none).
+  double stereo_subpixel = 1.0 / 32.0;
+
+  /// kinect1: baseline between projector and camera B, metres. > 0, default 0.075 (simkinect).
+  double kinect1_baseline = 0.075;
+  /// kinect1: standard deviation of the pixel shifts in u and v, pixels. >= 0, default 0.5.
+  double kinect1_shift_sigma = 0.5;
+  /// kinect1: standard deviation of the disparity noise, pixels. >= 0, default 0.05.
+  double kinect1_disparity_sigma = 0.05;
+  /// kinect1: disparity quantization step, pixels. >= 0, default 1/8 (0 = none).
+  double kinect1_subpixel = 0.125;
+  /// kinect1: side of the matching block, pixels. Odd, in [1, 31], default 9.
+  int kinect1_block = 9;
+  /// kinect1: inlier threshold of the block consistency test, pixels (weighted disparity
+  /// difference, see NoiseModel::kinect1). > 0, default 0.1.
+  double kinect1_block_threshold = 0.1;
+  /// kinect1: depth unit the measured depth is rounded to, metres. >= 0, default 0.001 (0 = none).
+  double kinect1_depth_unit = 0.001;
+
+  /// tof: range noise sigma at range 0, metres. >= 0, default 0.0015.
+  double tof_sigma = 0.0015;
+  /// tof: growth of the range noise sigma with range, metres per metre. >= 0, default 0.001.
+  double tof_sigma_slope = 0.001;
+  /// tof: width of the band at depth discontinuities where mixed pixels occur, pixels. In
+  /// [0, 16], default 1 (0 = no mixed pixels).
+  int tof_edge_band = 1;
+  /// tof: probability that a pixel in the band becomes a mixed pixel. In [0, 1], default 0.5.
+  double tof_mixed_probability = 0.5;
+  /// tof: a depth discontinuity is a range difference of more than this fraction of the smaller
+  /// range between two hit pixels. > 0, default 0.05.
+  double tof_edge_jump = 0.05;
 
   /// Probability that a pixel is dropped (NaN in the noisy frame), independently per pixel and
   /// frame. In [0, 1], default 0.
@@ -119,7 +212,7 @@ struct SceneOptions
   /// noise sigmas at its depth of 1 m).
   double motion_step = 0.01;
 
-  /// Seed of all random draws (noise, dropouts, stripe phases).
+  /// Seed of all random draws (noise, dropouts, stripe phases). The kinect1 dot pattern is fixed.
   std::uint64_t seed = 1;
 
   /// (width - 1) / 2 unless cx is given.
