@@ -16,7 +16,14 @@ if [[ ! -f "$input" ]]; then
 fi
 "$tools/range_nlm_denoise" "$input" "$out/denoised.pcd"
 "$tools/range_nlm_render" --before "$input" --after "$out/denoised.pcd" "$out/before_after_shaded.png" --mode shaded
-"$tools/range_nlm_render" --before "$input" --after "$out/denoised.pcd" "$out/before_after_curvature.png" --mode curvature
-"$tools/range_nlm_denoise" "$input" "$out/denoised_curvature.pcd" --colorize curvature --quiet
+# Both frames of a before/after comparison on one colour scale: the render takes it from the
+# 'before' frame and prints it; the two coloured clouds for pcl_viewer use the same value.
+report=$("$tools/range_nlm_render" --before "$input" --after "$out/denoised.pcd" "$out/before_after_curvature.png" \
+  --mode curvature)
+echo "$report"
+limit=$(sed -n 's/.*curvature scale +-\([0-9.eE+-]*\) .*/\1/p' <<<"$report")
+"$tools/range_nlm_render" "$input" "$out/input_curvature.pcd" --mode curvature --curvature-limit "$limit" >/dev/null
+"$tools/range_nlm_denoise" "$input" "$out/denoised_curvature.pcd" --colorize curvature --curvature-limit "$limit" --quiet
 echo "wrote $out/denoised.pcd, $out/before_after_shaded.png, $out/before_after_curvature.png"
-echo "inspect with: pcl_viewer -multiview 1 $input $out/denoised_curvature.pcd"
+echo "compare in pcl_viewer (one curvature scale, +-$limit 1/unit, for both):"
+echo "  pcl_viewer -multiview 1 $out/input_curvature.pcd $out/denoised_curvature.pcd"
