@@ -3,6 +3,8 @@
 // sequences the temporal standard deviation and the error at moving edges.
 #include "cli/cli.h"
 
+#include <nlohmann/json.hpp>
+
 #include <range_nlm/eval/metrics.h>
 
 #include <cmath>
@@ -45,23 +47,11 @@ const char* const kUsage =
     "every frame of the per-pixel standard deviation (mm) of the range over the frames.\n"
     "Frames are PCD files or 16-bit depth PNGs (see the depth PNG options).";
 
-/// A JSON string literal.
+/// A JSON string literal (bytes that are not UTF-8 replaced).
 std::string
 jsonQuote(const std::string& text)
 {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\')
-      out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof buffer, "\\u%04x", unsigned(static_cast<unsigned char>(c)));
-      out += buffer;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
+  return nlohmann::json(text).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 /// The frames named by a path: the file itself, or the sorted *.pcd files of a directory.
