@@ -499,3 +499,33 @@ TEST_F(LongRuns, StreamSoakSkipsRefusedFramesAndPassesUnfilterableOnesThrough)
   }
   EXPECT_EQ(reported, nan_frames);
 }
+
+TEST_F(LongRuns, DepthImageDirectoriesKeepGoingToo)
+{
+  // 16-bit depth PNGs: an unreadable one is named and skipped with --keep-going, an all-zero one
+  // (no measurement) is written unchanged, the rest filtered.
+  const fs::path in = dir_ / "png";
+  fs::create_directories(in);
+  for (int k = 0; k < 4; ++k) {
+    Cloud cloud = goodFrame(k);
+    if (k == 2)
+      cloud = allNan();
+    pcl::io::savePCDFileBinary((dir_ / "tmp.pcd").string(), cloud);
+    const ToolRun c = runTool({(dir_ / "tmp.pcd").string(), (in / ("d" + std::to_string(k) + ".png")).string(),
+                               "--output-format", "png", "--line-of-sight", "--depth-scale", "1000", "--quiet"},
+                              dir_ / "log.txt");
+    ASSERT_EQ(c.status, 0) << c.output;
+  }
+  const std::string broken = (in / "d1.png").string();
+  fs::resize_file(broken, fs::file_size(broken) / 2);
+  const ToolRun r = runTool({"--input-dir", in.string(), "--output-dir", (dir_ / "out").string(), "--keep-going",
+                             "--depth-scale", "1000", "--line-of-sight"},
+                            dir_ / "log.txt");
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_EQ(occurrences(r.output, "d1.png"), 1u) << r.output;
+  EXPECT_NE(r.output.find("'" + broken + "'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("d2.png: not filtered, written unchanged"), std::string::npos) << r.output;
+  for (const char* name : {"d0.png", "d2.png", "d3.png"})
+    EXPECT_TRUE(fs::exists(dir_ / "out" / name)) << name;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "d1.png"));
+}
