@@ -106,7 +106,10 @@ rangeNlmVariants(bool include_levers)
   v.emplace_back("  + 2 passes (normals re-estimated)", p);
   p.search_window = 9;
   p.patch_size = 3;
-  v.emplace_back("  + 9x9 search, 3x3 patch (= default)", p);
+  v.emplace_back("  + 9x9 search, 3x3 patch", p);
+  p.dilation = 0;
+  p.cross_frame_bandwidth = CrossFrameBandwidth::guarded;
+  v.emplace_back("  + automatic dilation, guarded cross-frame bandwidths (= default)", p);
   FilterParameters q = FilterParameters::recommended();
   q.displacement = Displacement::line_of_sight;
   v.emplace_back("default + line of sight", q);

@@ -5,6 +5,7 @@
 #include "bench_support.h"
 #include "peers.h"
 #include "quality_comparison.h"
+#include "real_noise_comparison.h"
 #include "temporal_comparison.h"
 #include "cli/cli.h"
 
@@ -1052,7 +1053,19 @@ runComparison(const po::variables_map& vm)
   std::ostringstream sink;
   std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
   std::ostringstream report, json_text;
-  if (vm.count("quality")) {
+  if (vm.count("real-noise")) {
+    real_noise::Options r;
+    r.threads = vm["threads"].as<int>();
+    if (vm.count("real-noise-quick")) {
+      r.noise_scales = {1.0};
+      r.seeds = {1};
+      r.include_mls = false;
+    }
+    real_noise::addShippedFrames(r, RANGE_NLM_DATA_DIR, vm["real-noise-data"].as<std::string>());
+    real_noise::run(r, log, report, &json_text);
+    if (json)
+      report.str(json_text.str());
+  } else if (vm.count("quality")) {
     quality::Options q = quality::defaultOptions();
     q.threads = vm["threads"].as<int>();
     int w = 0, h = 0;
@@ -1277,6 +1290,9 @@ run(int argc, char** argv)
     ("json-file", po::value<std::string>(), "also write that JSON object to this file")
     ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
     ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
+    ("real-noise", "instead of timing: range_nlm's settings against grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares under realistic sensor noise: generated scenes with the stereo, kinect1, tof and kinect noise models (ground truth), the real frames in data/ (residual of their planar regions, interior and border band) and static real sequences (jitter)")
+    ("real-noise-data", po::value<std::string>()->default_value(""), "--real-noise: another folder laid out like data/ whose real frames are also used (e.g. one holding depth-images/realsense-d435-static/pose4 and pose5 for the jitter)")
+    ("real-noise-quick", "--real-noise: one noise level and seed per model, without MovingLeastSquares")
     ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
     ("quiet,q", "no progress lines on stderr");
@@ -1286,7 +1302,7 @@ run(int argc, char** argv)
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
 
-  if (vm.count("quality") || vm.count("temporal-comparison"))
+  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise"))
     runComparison(vm);
   else
     runTiming(settingsFrom(vm));

@@ -46,8 +46,13 @@ enum class CrossFrameBandwidth
   /// too small for the frame-to-frame differences of a static scene, and the paper's weights
   /// reject the other frames' patches as if they had moved. Patches that really moved still
   /// differ by many times that noise; with noise independent from pixel to pixel the ratio is
-  /// about 1 and nothing changes.
-  temporal
+  /// about 1 and nothing changes. Always, also when the frames moved: for a static camera.
+  temporal,
+  /// temporal, except against a frame that moved (framesMoved in core/pipeline.h: whole blocks
+  /// of the frame shifted against the current one), which keeps its spatial s as in the paper.
+  /// Averaging a moved frame's surfaces along the current normals would shift the current
+  /// surfaces toward them. The default.
+  guarded
 };
 
 /// Direction along which a point is moved by the filtered normal offset h_i.
@@ -78,6 +83,16 @@ struct FilterParameters
   /// P: side of the square similarity patch, pixels. Odd, >= 1, no larger than the cloud.
   /// Default 3 (paper: 5); a small patch keeps points next to an edge similar to their own side.
   int patch_size = 3;
+  /// Spacing of the pixels of the search window and of the patches (a dilated window): the
+  /// candidates of p_(u,v) are p_(u + a k, v + b k) for |a|, |b| <= S / 2, and the patch offsets
+  /// are multiples of k, so that with spatially correlated noise the window reaches past the
+  /// noise's correlation length at the same cost. With k > 1 the first iterations - 1 passes
+  /// (at least one) filter each phase (u mod k, v mod k) of the frame as a frame of its own, and a
+  /// last pass with contiguous windows follows if iterations > 1. 0 = automatic: from the
+  /// frame's noise correlation, 1 for independent noise, 2 for correlated noise in a VGA frame,
+  /// 4 from 1280 columns on (automaticDilation in core/pipeline.h). 1 = contiguous windows
+  /// (the paper). >= 0, default 0.
+  int dilation = 0;
   /// Number of filter passes; normals and automatic bandwidths are re-estimated before each.
   /// >= 1, default 2 (paper: 1).
   int iterations = 2;
@@ -124,8 +139,8 @@ struct FilterParameters
   /// Direction of the displacement; see Displacement.
   Displacement displacement = Displacement::normal;
   /// Similarity bandwidth of the other frames' patches (temporal filter, range-adaptive model
-  /// with automatic s); see CrossFrameBandwidth. Default temporal (paper: spatial).
-  CrossFrameBandwidth cross_frame_bandwidth = CrossFrameBandwidth::temporal;
+  /// with automatic s); see CrossFrameBandwidth. Default guarded (paper: spatial).
+  CrossFrameBandwidth cross_frame_bandwidth = CrossFrameBandwidth::guarded;
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;
 

@@ -241,6 +241,40 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
   return profile;
 }
 
+bool
+framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b)
+{
+  if (a.size() != b.size() || normals_a.size() != a.size() || a.width <= 0)
+    return false;
+  // Blocks of about 1/20 of the width (32 pixels at 640): many noise blobs each, so that their
+  // median difference is near 0 for noise, however correlated, and near the motion where the
+  // camera or the scene moved.
+  const int block = std::max(8, a.width / 20);
+  std::vector<float> offsets, spreads, along;
+  for (int v0 = 0; v0 + block <= a.height; v0 += block)
+    for (int u0 = 0; u0 + block <= a.width; u0 += block) {
+      along.clear();
+      for (int v = v0; v < v0 + block; ++v)
+        for (int u = u0; u < u0 + block; ++u) {
+          const std::size_t i = static_cast<std::size_t>(v) * a.width + u;
+          if (a.valid[i] && b.valid[i] && std::isfinite(normals_a.nx[i]))
+            along.push_back((b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
+                            (b.z[i] - a.z[i]) * normals_a.nz[i]);
+        }
+      if (along.size() < static_cast<std::size_t>(block * block / 2))
+        continue;
+      const float m = medianOf(along);
+      for (float& d : along)
+        d = std::fabs(d - m);
+      offsets.push_back(std::fabs(m));
+      spreads.push_back(medianOf(along));
+    }
+  if (offsets.size() < 4)
+    return false;
+  const float offset = medianOf(offsets), spread = medianOf(spreads);
+  return offset > spread;
+}
+
 float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
                            const Viewpoint& viewpoint)
@@ -262,6 +296,50 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
   if (ratios.size() < 64)
     return 0.0f;
   return 1.4826f * 0.70710678f * medianOf(std::move(ratios));
+}
+
+NoiseCorrelation
+estimateNoiseCorrelation(const Grid& grid, int step)
+{
+  NoiseCorrelation result;
+  const int w = grid.width, h = grid.height;
+  step = std::max(1, step);
+  std::vector<float> values;
+  for (int lag = 1; lag <= 8; ++lag) {
+    values.clear();
+    auto add = [&](std::size_t a, std::size_t c, std::size_t b) {
+      if (!(grid.valid[a] && grid.valid[b] && grid.valid[c]))
+        return;
+      const float za = grid.z[a], zb = grid.z[b], zc = grid.z[c];
+      if (!(za > 0.0f && zb > 0.0f && zc > 0.0f))
+        return;
+      const float d2 = 1.0f / za - 2.0f / zc + 1.0f / zb;
+      values.push_back(std::fabs(d2) * zc * zc);
+    };
+    for (int v = 0; v < h; v += step)
+      for (int u = lag; u + lag < w; u += step) {
+        const std::size_t c = static_cast<std::size_t>(v) * w + u;
+        add(c - lag, c, c + lag);
+      }
+    for (int v = lag; v + lag < h; v += step)
+      for (int u = 0; u < w; u += step) {
+        const std::size_t c = static_cast<std::size_t>(v) * w + u;
+        add(c - static_cast<std::size_t>(lag) * w, c, c + static_cast<std::size_t>(lag) * w);
+      }
+    if (lag == 1)
+      result.samples = values.size();
+    if (values.size() < 64)
+      continue;
+    // The mean of the smallest 80 %: robust to depth edges, and unlike a median not stuck on
+    // the steps of a quantized depth unit.
+    const std::size_t keep = values.size() * 4 / 5;
+    std::nth_element(values.begin(), values.begin() + keep, values.end());
+    double sum = 0.0;
+    for (std::size_t i = 0; i < keep; ++i)
+      sum += values[i];
+    result.scale[lag - 1] = static_cast<float>(sum / keep);
+  }
+  return result;
 }
 
 } // namespace range_nlm

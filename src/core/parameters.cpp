@@ -30,6 +30,8 @@ FilterParameters::validate() const
 {
   checkOddWindow("search_window", search_window);
   checkOddWindow("patch_size", patch_size);
+  if (dilation < 0)
+    fail("dilation", dilation, "must be >= 0 (0 = automatic)");
   if (iterations < 1)
     fail("iterations", iterations, "must be at least 1");
   if (threads < 0)
@@ -91,6 +93,7 @@ FilterParameters::paper()
   p.max_displacement = 0.0f;
   p.displacement = Displacement::normal;
   p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
+  p.dilation = 1;
   return p;
 }
 

@@ -261,9 +261,118 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   return std::move(workspace.run);
 }
 
+namespace
+{
+void
+runContiguous(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+              const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
+
+/// The pixels (u0 + a k, v0 + b k) of a grid-sized array as an array of their own.
+template <typename T>
+void
+subsample(const std::vector<T>& from, int width, int height, int k, int u0, int v0, std::vector<T>& to)
+{
+  const int w = (width - u0 + k - 1) / k, h = (height - v0 + k - 1) / k;
+  to.resize(static_cast<std::size_t>(w) * h);
+  for (int b = 0; b < h; ++b)
+    for (int a = 0; a < w; ++a)
+      to[static_cast<std::size_t>(b) * w + a] = from[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k];
+}
+
+void
+subsample(const Grid& from, int k, int u0, int v0, Grid& to)
+{
+  to.width = (from.width - u0 + k - 1) / k;
+  to.height = (from.height - v0 + k - 1) / k;
+  subsample(from.x, from.width, from.height, k, u0, v0, to.x);
+  subsample(from.y, from.width, from.height, k, u0, v0, to.y);
+  subsample(from.z, from.width, from.height, k, u0, v0, to.z);
+  subsample(from.valid, from.width, from.height, k, u0, v0, to.valid);
+}
+} // namespace
+
+int
+automaticDilation(const Grid& frame)
+{
+  const int lag = std::clamp((8 * frame.width + 320) / 640, 2, 8);
+  const NoiseCorrelation c = estimateNoiseCorrelation(frame);
+  const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
+  return far > 0.0f && near < 0.5f * far ? std::clamp((2 * frame.width + 320) / 640, 2, 4) : 1;
+}
+
 void
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
+{
+  if (frames.empty() || center < 0 || center >= static_cast<int>(frames.size()) || !frames[center]) {
+    runContiguous(frames, center, parameters, viewpoint, active, workspace);
+    return;
+  }
+  const int k = parameters.dilation > 0 ? parameters.dilation : automaticDilation(*frames[center]);
+  if (k <= 1) {
+    runContiguous(frames, center, parameters, viewpoint, active, workspace);
+    return;
+  }
+  const Grid& input = *frames[center];
+  // The dilated passes: each phase (u mod k, v mod k) of the frames is a grid of its own whose
+  // neighbours are k pixels apart, filtered with contiguous windows.
+  FilterParameters coarse = parameters;
+  coarse.dilation = 1;
+  coarse.iterations = std::max(1, parameters.iterations - 1);
+  Grid result;
+  detail::copyGrid(input, result, detail::resolveThreads(parameters.threads));
+  std::vector<Grid> sub(frames.size());
+  std::vector<const Grid*> sub_frames(frames.size());
+  std::vector<unsigned char> sub_active;
+  Workspace phase;
+  phase.observer = workspace.observer;
+  for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
+    for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        if (!frames[f] || frames[f]->width != input.width || frames[f]->height != input.height) {
+          runContiguous(frames, center, parameters, viewpoint, active, workspace); // reports the size error
+          return;
+        }
+        subsample(*frames[f], k, u0, v0, sub[f]);
+        sub_frames[f] = &sub[f];
+      }
+      if (!active.empty())
+        subsample(active, input.width, input.height, k, u0, v0, sub_active);
+      try {
+        runContiguous(sub_frames, center, coarse, viewpoint, sub_active, phase);
+      } catch (const UnfilterableFrame&) {
+        continue; // this phase keeps its points
+      }
+      const Grid& out = phase.run.output;
+      for (int b = 0; b < out.height; ++b)
+        for (int a = 0; a < out.width; ++a) {
+          const std::size_t from = static_cast<std::size_t>(b) * out.width + a;
+          const std::size_t to = static_cast<std::size_t>(v0 + b * k) * input.width + u0 + a * k;
+          result.x[to] = out.x[from];
+          result.y[to] = out.y[from];
+          result.z[to] = out.z[from];
+        }
+    }
+  if (parameters.iterations <= 1) {
+    workspace.run.output = std::move(result);
+    workspace.run.bandwidths = phase.run.bandwidths;
+    workspace.run.frame_weights = phase.run.frame_weights;
+    return;
+  }
+  // The last pass with contiguous windows on the full frame.
+  FilterParameters fine = parameters;
+  fine.dilation = 1;
+  fine.iterations = 1;
+  std::vector<const Grid*> last = frames;
+  last[center] = &result;
+  runContiguous(last, center, fine, viewpoint, active, workspace);
+}
+
+namespace
+{
+void
+runContiguous(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+              const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
 {
   if (frames.empty() || center < 0 || center >= static_cast<int>(frames.size()) || !frames[center])
     throw std::invalid_argument("range_nlm: the current frame index is outside the frame list");
@@ -446,7 +555,9 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
         // patches then get s from that noise, and its points a d that also spans the distance
         // two samples of one surface point have from frame to frame (2 s^2 more in d^2).
         const float ratio =
-            k != center && parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal
+            k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
+                            (parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded &&
+                             !framesMoved(current, normals, *frames[k])))
                 ? std::max(1.0f, estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k], viewpoint))
                 : 1.0f;
         const bool cross = ratio > 1.0f;
@@ -491,5 +602,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
                  parameters.line_of_sight_min_cos);
   }
 }
+
+} // namespace
 
 } // namespace range_nlm

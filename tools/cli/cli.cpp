@@ -79,6 +79,8 @@ addFilterOptions(po::options_description& options)
     ("similarity-bandwidth", po::value<float>(), "s in cloud units [default: automatic]")
     ("seed", po::value<std::uint64_t>()->default_value(42), "seed of the bandwidth sample")
     ("normal-window", po::value<int>(), ("odd side of the normal-estimation neighbourhood [preset: " + std::to_string(d.normal_window) + "]").c_str())
+    ("dilation", po::value<int>(), "spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is spatially correlated, 1 for independent noise), 1 = contiguous windows [preset: 0; paper: 1]")
+    ("cross-frame", po::value<std::string>(), "temporal runs: s and d of the other frames: 'guarded' (raised to their frame-to-frame noise unless the frame moved), 'temporal' (always raised: a static camera), 'spatial' (their own spatial noise, the paper) [preset: guarded; paper: spatial]")
     ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
     ("line-of-sight", "move points along their camera ray instead of the normal (depth sensors)");
   // clang-format on
@@ -107,6 +109,19 @@ filterParametersFrom(const po::variables_map& vm)
   p.seed = vm["seed"].as<std::uint64_t>();
   if (vm.count("normal-window"))
     p.normal_window = vm["normal-window"].as<int>();
+  if (vm.count("dilation"))
+    p.dilation = vm["dilation"].as<int>();
+  if (vm.count("cross-frame")) {
+    const std::string mode = vm["cross-frame"].as<std::string>();
+    if (mode == "guarded")
+      p.cross_frame_bandwidth = CrossFrameBandwidth::guarded;
+    else if (mode == "temporal")
+      p.cross_frame_bandwidth = CrossFrameBandwidth::temporal;
+    else if (mode == "spatial")
+      p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
+    else
+      throw UsageError("--cross-frame '" + mode + "' is invalid: expected 'guarded', 'temporal' or 'spatial'");
+  }
   if (vm.count("direct"))
     p.evaluation = Evaluation::direct;
   if (vm.count("line-of-sight"))

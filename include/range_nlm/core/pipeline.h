@@ -86,6 +86,15 @@ NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint);
 
+/// Whether frame `b` moved against frame `a` (camera or scene motion) rather than differing by
+/// noise: the frames are cut into blocks of width / 20 pixels (at least 8); in each block with
+/// at least half its pixels valid in both frames, the median m of (p_b - p_a) . n_a and the
+/// median |(p_b - p_a) . n_a - m| are taken. Noise, however correlated, leaves m near 0 in
+/// blocks holding many noise blobs; motion shifts whole blocks. True if the median |m| over the
+/// blocks exceeds the median spread. False with fewer than 4 such blocks.
+bool
+framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b);
+
 /// How much larger the frame-to-frame noise of frame `b` is than its spatial noise profile says:
 /// 1.4826 x the median, over the pixels valid in both frames with a normal, of
 /// |(p_b - p_a) . n_a| / profile_b.sigmaAt(rho_a), divided by sqrt(2) (the difference holds the
@@ -97,6 +106,36 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
                            const Viewpoint& viewpoint);
+
+/// How the noise of a frame varies with the pixel lag: the robust scale of the second
+/// differences of inverse depth at lags 1 .. 8 pixels along rows and columns (exactly zero on
+/// planes, since 1/z is affine in the pixel coordinates on a plane), converted to depth by z^2.
+/// For independent per-pixel noise the scale is the same at every lag; for spatially correlated
+/// noise it grows with the lag until the lag passes the correlation length.
+struct NoiseCorrelation
+{
+  /// scale[l - 1]: the mean of the smallest 80 % of |w(u - l) - 2 w(u) + w(u + l)| z(u)^2 at
+  /// lag l, cloud units (robust to depth edges, and not stuck on the steps of a quantized depth
+  /// unit as a median is); 0 where fewer than 64 triples qualified.
+  std::array<float, 8> scale{};
+  /// Pixel triples sampled per lag.
+  std::size_t samples = 0;
+};
+
+/// NoiseCorrelation of a frame from the valid triples of every `step`-th row and column.
+NoiseCorrelation
+estimateNoiseCorrelation(const Grid& grid, int step = 4);
+
+/// The dilation FilterParameters::dilation = 0 (automatic) gives a frame. With the reference lag
+/// R = 8 pixels per 640 columns (rounded, in [2, 8]): if the variance of the second differences
+/// at lag 1 is less than half of that at lag R (estimateNoiseCorrelation), the noise is
+/// correlated over several pixels and the dilation is 2 per 640 columns (rounded, in [2, 4]: 2
+/// in a VGA frame, 4 at 1280 columns and more); else 1. Both scale with the width because a
+/// frame's details span more pixels the more pixels it has: a dilated 3 x 3 patch must stay
+/// small against them, and at long lags a small frame's curvature and edges, not its noise,
+/// dominate the differences.
+int
+automaticDilation(const Grid& frame);
 
 /// One frame of the (temporal) neighbourhood: its points, bandwidths and frame weight
 /// Psi_k = Psi_dk * Psi_sk. The static filter is the case of one frame with weight 1.

@@ -1,0 +1,369 @@
+#include "real_noise_comparison.h"
+#include "quality_comparison.h"
+
+#include <range_nlm/core/pipeline.h>
+#include <range_nlm/eval/synthetic_scene.h>
+#include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/pcd_file.h>
+#include <range_nlm/nonlocal_means_filter.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <iomanip>
+#include <sstream>
+
+namespace range_nlm
+{
+namespace tools
+{
+namespace real_noise
+{
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+namespace fs = std::filesystem;
+
+namespace
+{
+struct Smoother
+{
+  std::string family, setting;
+  std::function<Cloud(const Cloud&)> apply;
+};
+
+std::string
+fixed(double v, int digits)
+{
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string
+mm(double metres)
+{
+  return std::isfinite(metres) ? fixed(1000.0 * metres, 2) : "-";
+}
+
+Cloud
+rangeNlm(const Cloud& in, FilterParameters p)
+{
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setParameters(p);
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud out;
+  f.filter(out);
+  return out;
+}
+
+std::vector<Smoother>
+rangeNlmSmoothers(int threads)
+{
+  std::vector<Smoother> s;
+  for (auto [name, p] : variants()) {
+    p.threads = threads;
+    s.push_back(Smoother{"range_nlm", name, [p](const Cloud& in) { return rangeNlm(in, p); }});
+  }
+  return s;
+}
+
+Smoother
+fastBilateral(float sigma_s, float sigma_r)
+{
+  return Smoother{"FastBilateral", "sigma_s " + fixed(sigma_s, 0) + ", sigma_r " + fixed(sigma_r, 2),
+                  [=](const Cloud& in) { return quality::fastBilateral(in, sigma_s, sigma_r); }};
+}
+
+std::vector<Smoother>
+fastBilateralGrid()
+{
+  std::vector<Smoother> s;
+  for (float sigma_s : {3.0f, 5.0f, 7.0f, 10.0f, 15.0f})
+    for (float sigma_r : {0.01f, 0.03f, 0.05f, 0.1f})
+      s.push_back(fastBilateral(sigma_s, sigma_r));
+  return s;
+}
+
+std::vector<Smoother>
+mlsGrid()
+{
+  std::vector<Smoother> s;
+  for (double radius : {0.02, 0.03, 0.05})
+    s.push_back(Smoother{"MLS", "order 2, radius " + fixed(radius, 2) + " m",
+                         [=](const Cloud& in) { return quality::movingLeastSquares(in, radius); }});
+  return s;
+}
+
+Cloud
+loadXyz(const std::string& path)
+{
+  DepthIntrinsics intrinsics;
+  const fs::path beside = fs::path(path).parent_path() / "intrinsics.txt";
+  const fs::path above = fs::path(path).parent_path().parent_path() / "intrinsics.txt";
+  if (io::isDepthImagePath(path)) {
+    if (fs::exists(beside))
+      intrinsics = readIntrinsics(beside.string());
+    else if (fs::exists(above))
+      intrinsics = readIntrinsics(above.string());
+  }
+  return io::xyzFromBlob(io::loadFrame(path, intrinsics), path);
+}
+
+std::string
+correlationText(const Cloud& c)
+{
+  const Grid g = Grid::fromInterleaved(reinterpret_cast<const float*>(c.points.data()), int(c.width), int(c.height),
+                                       sizeof(pcl::PointXYZ) / sizeof(float));
+  const NoiseCorrelation n = estimateNoiseCorrelation(g);
+  std::ostringstream s;
+  s << "second-difference scale by lag (mm):";
+  for (float v : n.scale)
+    s << " " << fixed(1000 * v, 2);
+  s << "; automatic dilation " << automaticDilation(g);
+  return s.str();
+}
+
+struct GeneratedRow
+{
+  std::string family, setting;
+  FrameMetrics m;
+};
+
+/// The row of a family with the smallest flat + feature RMSE.
+const GeneratedRow*
+balanced(const std::vector<GeneratedRow>& rows, const std::string& family)
+{
+  const GeneratedRow* best = nullptr;
+  for (const GeneratedRow& r : rows)
+    if (r.family == family && (!best || r.m.flat_rmse + r.m.feature_rmse < best->m.flat_rmse + best->m.feature_rmse))
+      best = &r;
+  return best;
+}
+} // namespace
+
+std::vector<std::pair<std::string, FilterParameters>>
+variants()
+{
+  std::vector<std::pair<std::string, FilterParameters>> v;
+  v.emplace_back("default", FilterParameters::recommended());
+  v.emplace_back("preset paper", FilterParameters::paper());
+  FilterParameters p = FilterParameters::recommended();
+  p.dilation = 1;
+  v.emplace_back("default, contiguous windows", p);
+  p = FilterParameters::recommended();
+  p.iterations = 3;
+  v.emplace_back("default, 3 passes", p);
+  return v;
+}
+
+void
+addShippedFrames(Options& options, const std::string& data_dir, const std::string& extra_dir)
+{
+  auto add = [&](const std::string& dir, const std::string& name) {
+    const fs::path p = fs::path(dir) / name;
+    if (!dir.empty() && fs::exists(p))
+      options.real_frames.push_back(p.string());
+  };
+  for (const std::string& dir : {data_dir, extra_dir}) {
+    add(dir, "milk_cartoon_all_small_clorox.pcd");
+    add(dir, "table_scene_mug_stereo_textured.pcd");
+    add(dir, "kinect-sequence/frame_20121214T142255.814212.pcd");
+    add(dir, "depth-images/tum-fr2-desk-pair/1_depth.png");
+    add(dir, "depth-images/realsense-d415-vcl3d/0_M11_depth_0.png");
+    add(dir, "depth-images/azure-kinect-mug/depth_nfov_unbinned.png");
+  }
+  // The same file under both folders once.
+  std::vector<std::string> unique;
+  for (const std::string& f : options.real_frames) {
+    const bool seen = std::any_of(unique.begin(), unique.end(), [&](const std::string& u) {
+      return fs::path(u).filename() == fs::path(f).filename();
+    });
+    if (!seen)
+      unique.push_back(f);
+  }
+  options.real_frames = unique;
+  if (extra_dir.empty())
+    return;
+  for (const auto& [pose, first] : {std::pair<std::string, int>{"pose4", 3}, {"pose5", 6}}) {
+    std::vector<std::string> seq;
+    for (int k = first; k < first + 3; ++k) {
+      const fs::path p =
+          fs::path(extra_dir) / "depth-images/realsense-d435-static" / pose / (std::to_string(k) + "_realsense_depth.png");
+      if (fs::exists(p))
+        seq.push_back(p.string());
+    }
+    if (seq.size() == 3)
+      options.static_sequences.push_back(seq);
+  }
+}
+
+void
+run(const Options& options, std::ostream& log, std::ostream& report, std::ostream* json)
+{
+  nlohmann::json out = nlohmann::json::object();
+  const std::vector<Smoother> ours = rangeNlmSmoothers(options.threads);
+  const std::vector<Smoother> fb = fastBilateralGrid();
+  const std::vector<Smoother> mls = options.include_mls ? mlsGrid() : std::vector<Smoother>{};
+
+  // 1. Generated scenes with ground truth.
+  std::map<std::string, std::pair<int, int>> wins; // variant: scenes won on both / scenes
+  std::map<std::string, std::pair<double, double>> log_ratio; // variant: sum of log(flat ratio), log(feature ratio)
+  report << "## Generated scenes with sensor noise (point-to-plane RMSE against ground truth, mm)\n\n"
+         << "FastBilateral and MLS: the setting of each grid with the smallest flat + feature RMSE on that scene "
+            "(best-balanced).\n\n"
+         << "| scene | noisy flat / feature | ";
+  for (const Smoother& s : ours)
+    report << s.setting << " | ";
+  report << "FastBilateral best-balanced | MLS best-balanced |\n|---|---|";
+  for (std::size_t k = 0; k < ours.size() + 2; ++k)
+    report << "---|";
+  report << "\n";
+  for (const std::string& model : options.models)
+    for (double scale : options.noise_scales)
+      for (std::uint64_t seed : options.seeds) {
+        SceneOptions scene;
+        scene.width = options.width;
+        scene.height = options.height;
+        scene.noise = noiseModelFromString(model);
+        scene.noise_scale = scale;
+        scene.seed = seed;
+        const SyntheticFrame frame = renderSequence(scene).front();
+        EvaluationOptions eval;
+        eval.threads = options.threads;
+        const std::string name = model + " x" + fixed(scale, 1) + " seed " + std::to_string(seed);
+        std::vector<GeneratedRow> rows;
+        log << name << ": " << correlationText(frame.noisy) << std::endl;
+        const FrameMetrics noisy = evaluateFrame(frame.truth, frame.noisy, nullptr, eval);
+        for (const auto* family : {&ours, &fb, &mls})
+          for (const Smoother& s : *family) {
+            const Cloud result = s.apply(frame.noisy);
+            rows.push_back(GeneratedRow{s.family, s.setting, evaluateFrame(frame.truth, result, &frame.noisy, eval)});
+          }
+        const GeneratedRow* fb_best = balanced(rows, "FastBilateral");
+        const GeneratedRow* mls_best = balanced(rows, "MLS");
+        report << "| " << name << " | " << mm(noisy.flat_rmse) << " / " << mm(noisy.feature_rmse) << " | ";
+        nlohmann::json& j = out["generated"][name];
+        j["noisy"] = {noisy.flat_rmse * 1e3, noisy.feature_rmse * 1e3};
+        for (const GeneratedRow& r : rows)
+          if (r.family == "range_nlm") {
+            const bool win = r.m.flat_rmse <= fb_best->m.flat_rmse && r.m.feature_rmse <= fb_best->m.feature_rmse &&
+                             (!mls_best || (r.m.flat_rmse <= mls_best->m.flat_rmse &&
+                                            r.m.feature_rmse <= mls_best->m.feature_rmse));
+            report << mm(r.m.flat_rmse) << " / " << mm(r.m.feature_rmse) << (win ? " (wins)" : "") << " | ";
+            wins[r.setting].first += win ? 1 : 0;
+            wins[r.setting].second += 1;
+            log_ratio[r.setting].first += std::log(r.m.flat_rmse / fb_best->m.flat_rmse);
+            log_ratio[r.setting].second += std::log(r.m.feature_rmse / fb_best->m.feature_rmse);
+            j[r.setting] = {r.m.flat_rmse * 1e3, r.m.feature_rmse * 1e3};
+          }
+        report << mm(fb_best->m.flat_rmse) << " / " << mm(fb_best->m.feature_rmse) << " (" << fb_best->setting << ") | ";
+        j["FastBilateral"] = {fb_best->m.flat_rmse * 1e3, fb_best->m.feature_rmse * 1e3, fb_best->setting};
+        if (mls_best) {
+          report << mm(mls_best->m.flat_rmse) << " / " << mm(mls_best->m.feature_rmse) << " (" << mls_best->setting
+                 << ") |\n";
+          j["MLS"] = {mls_best->m.flat_rmse * 1e3, mls_best->m.feature_rmse * 1e3, mls_best->setting};
+        } else {
+          report << "- |\n";
+        }
+        log << name << ": FastBilateral " << mm(fb_best->m.flat_rmse) << " / " << mm(fb_best->m.feature_rmse);
+        for (const GeneratedRow& r : rows)
+          if (r.family == "range_nlm")
+            log << "; " << r.setting << " " << mm(r.m.flat_rmse) << " / " << mm(r.m.feature_rmse);
+        log << std::endl;
+      }
+  report << "\n| range_nlm setting | scenes won on both (vs FastBilateral and MLS) | flat RMSE / FastBilateral "
+            "(geometric mean) | feature RMSE / FastBilateral |\n|---|---|---|---|\n";
+  for (const Smoother& s : ours) {
+    const auto& w = wins[s.setting];
+    const auto& l = log_ratio[s.setting];
+    if (w.second == 0)
+      continue;
+    report << "| " << s.setting << " | " << w.first << " of " << w.second << " | "
+           << fixed(std::exp(l.first / w.second), 2) << " | " << fixed(std::exp(l.second / w.second), 2) << " |\n";
+  }
+
+  // 2. Real frames: residual of the raw frame's planar regions.
+  const std::vector<Smoother> fb_real{fastBilateral(5.0f, 0.03f), fastBilateral(10.0f, 0.05f),
+                                      fastBilateral(15.0f, 0.05f)};
+  if (!options.real_frames.empty()) {
+    report << "\n## Real frames: residual to the planes of the raw frame's planar regions (RMS, mm; interior / border "
+              "band of 3 px; points lost)\n\n| frame | regions | raw | ";
+    for (const Smoother& s : ours)
+      report << s.setting << " | ";
+    for (const Smoother& s : fb_real)
+      report << "FastBilateral " << s.setting << " | ";
+    report << "\n|---|---|---|";
+    for (std::size_t k = 0; k < ours.size() + fb_real.size(); ++k)
+      report << "---|";
+    report << "\n";
+  }
+  for (const std::string& path : options.real_frames) {
+    const Cloud raw = loadXyz(path);
+    log << path << ": " << correlationText(raw) << std::endl;
+    const PlanarRegions regions = findPlanarRegions(raw);
+    const PlanarResidual before = planarResidual(regions, raw);
+    const std::string name = fs::path(path).filename().string();
+    report << "| " << name << " | " << regions.planes.size() << " | " << mm(before.interior_rms) << " / "
+           << mm(before.border_rms) << " | ";
+    nlohmann::json& j = out["real"][name];
+    j["raw"] = {before.interior_rms * 1e3, before.border_rms * 1e3};
+    log << name << ": raw " << mm(before.interior_rms) << " / " << mm(before.border_rms);
+    for (const auto* family : {&ours, &fb_real})
+      for (const Smoother& s : *family) {
+        const PlanarResidual r = planarResidual(regions, s.apply(raw));
+        report << mm(r.interior_rms) << " / " << mm(r.border_rms) << (r.points_lost ? " (" + std::to_string(r.points_lost) + " lost)" : "") << " | ";
+        j[s.family + " " + s.setting] = {r.interior_rms * 1e3, r.border_rms * 1e3, r.points_lost};
+        log << "; " << s.family << " " << s.setting << " " << mm(r.interior_rms) << " / " << mm(r.border_rms);
+      }
+    report << "\n";
+    log << std::endl;
+  }
+
+  // 3. Static real sequences: jitter of the frames filtered one by one.
+  if (!options.static_sequences.empty()) {
+    report << "\n## Static real sequences: median per-pixel range jitter (sample std over the frames, mm), frames "
+              "filtered one by one\n\n| sequence | raw | ";
+    for (const Smoother& s : ours)
+      report << s.setting << " | ";
+    for (const Smoother& s : fb_real)
+      report << "FastBilateral " << s.setting << " | ";
+    report << "\n|---|---|";
+    for (std::size_t k = 0; k < ours.size() + fb_real.size(); ++k)
+      report << "---|";
+    report << "\n";
+  }
+  for (const std::vector<std::string>& sequence : options.static_sequences) {
+    std::vector<Cloud> raw;
+    for (const std::string& f : sequence)
+      raw.push_back(loadXyz(f));
+    const std::string name = fs::path(sequence.front()).parent_path().filename().string();
+    log << sequence.front() << ": " << correlationText(raw.front()) << std::endl;
+    const TemporalJitter before = temporalJitter(raw);
+    report << "| " << name << " | " << mm(before.median) << " | ";
+    nlohmann::json& j = out["jitter"][name];
+    j["raw"] = before.median * 1e3;
+    log << name << ": raw " << mm(before.median);
+    for (const auto* family : {&ours, &fb_real})
+      for (const Smoother& s : *family) {
+        JitterEvaluator e;
+        for (const Cloud& c : raw)
+          e.add(s.apply(c));
+        const TemporalJitter t = e.jitter();
+        report << mm(t.median) << " | ";
+        j[s.family + " " + s.setting] = t.median * 1e3;
+        log << "; " << s.family << " " << s.setting << " " << mm(t.median);
+      }
+    report << "\n";
+    log << std::endl;
+  }
+  if (json)
+    *json << out.dump() << "\n";
+}
+
+} // namespace real_noise
+} // namespace tools
+} // namespace range_nlm

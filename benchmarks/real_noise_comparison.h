@@ -1,0 +1,58 @@
+// range_nlm_bench --real-noise: range_nlm against PCL's smoothers under realistic sensor noise.
+// Generated scenes with the sensor noise models (ground truth: flat and feature RMSE), shipped
+// real frames (residual of their planar regions, interior and border band) and static real
+// sequences (temporal jitter of the frames filtered one by one).
+#pragma once
+
+#include <range_nlm/eval/metrics.h>
+#include <range_nlm/parameters.h>
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace range_nlm
+{
+namespace tools
+{
+namespace real_noise
+{
+
+struct Options
+{
+  /// Frame size of the generated scenes.
+  int width = 640, height = 480;
+  /// Noise models of the generated scenes ("stereo", "kinect1", "tof", "kinect").
+  std::vector<std::string> models{"stereo", "kinect1", "tof", "kinect"};
+  /// Factors on each model's random error.
+  std::vector<double> noise_scales{1.0, 2.0};
+  /// Seeds of the generated scenes.
+  std::vector<std::uint64_t> seeds{1, 2};
+  /// Real frames (PCD or depth PNG with an intrinsics.txt beside it) for the planar residual.
+  std::vector<std::string> real_frames;
+  /// Static real sequences (each a list of frames) for the jitter.
+  std::vector<std::vector<std::string>> static_sequences;
+  /// Include pcl::MovingLeastSquares (slow) in the generated scenes.
+  bool include_mls = true;
+  int threads = 0;
+};
+
+/// The frames the comparison uses by default: the real frames under `data_dir` (the project's
+/// data/) and, if `extra_dir` is not empty, those under it (same layout; e.g. a copy with the
+/// RealSense D435 static triples), each found by name; missing ones are skipped.
+void
+addShippedFrames(Options& options, const std::string& data_dir, const std::string& extra_dir);
+
+/// The range_nlm settings compared: the default, the paper preset, the default without its
+/// dilated passes (contiguous windows) and with a third pass.
+std::vector<std::pair<std::string, FilterParameters>>
+variants();
+
+/// Runs the comparison; progress on `log`, the Markdown report on `report`, one JSON object on
+/// `json` (may be the same stream as nothing else).
+void
+run(const Options& options, std::ostream& log, std::ostream& report, std::ostream* json);
+
+} // namespace real_noise
+} // namespace tools
+} // namespace range_nlm

@@ -1,0 +1,164 @@
+// The noise-correlation estimate behind the automatic dilation, the dilated passes (each phase
+// filtered as a frame of its own) and the motion test of the guarded cross-frame bandwidths.
+#include <range_nlm/core/pipeline.h>
+#include <range_nlm/eval/synthetic_scene.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace range_nlm;
+
+namespace
+{
+Grid
+gridOf(const pcl::PointCloud<pcl::PointXYZ>& c)
+{
+  return Grid::fromInterleaved(reinterpret_cast<const float*>(c.points.data()), static_cast<int>(c.width),
+                               static_cast<int>(c.height), sizeof(pcl::PointXYZ) / sizeof(float));
+}
+
+SceneOptions
+planeScene(const char* noise, int width, int height, int frames = 1)
+{
+  SceneOptions o;
+  o.width = width;
+  o.height = height;
+  o.fx = o.fy = 525.0 * width / 640;
+  o.scene = SceneType::plane;
+  o.plane_depth = 1.5;
+  o.noise = noiseModelFromString(noise);
+  o.frames = frames;
+  o.seed = 11;
+  return o;
+}
+
+const Viewpoint kOrigin{0.0f, 0.0f, 0.0f};
+} // namespace
+
+TEST(NoiseCorrelation, IndependentNoiseIsFlatOverLagsCorrelatedNoiseGrows)
+{
+  const Grid iid = gridOf(renderSequence(planeScene("kinect", 320, 240)).front().noisy);
+  const NoiseCorrelation a = estimateNoiseCorrelation(iid);
+  EXPECT_GT(a.samples, 1000u);
+  // On a plane the second differences of 1/z are noise only: the same scale at every lag.
+  for (float s : a.scale)
+    EXPECT_NEAR(s / a.scale[0], 1.0, 0.1);
+
+  SceneOptions stereo = planeScene("stereo", 320, 240);
+  stereo.stereo_correlated_share = 0.9;
+  stereo.stereo_correlation_length = 4.0;
+  const NoiseCorrelation b = estimateNoiseCorrelation(gridOf(renderSequence(stereo).front().noisy));
+  // Correlation length 4 px: at lag 1 the differences cancel most of the correlated part.
+  EXPECT_LT(b.scale[0] * b.scale[0], 0.3f * b.scale[7] * b.scale[7]);
+  for (int lag = 1; lag < 8; ++lag)
+    EXPECT_GE(b.scale[lag], 0.95f * b.scale[lag - 1]) << lag;
+}
+
+TEST(NoiseCorrelation, AutomaticDilationIsOneForIndependentNoiseAndGrowsWithTheWidth)
+{
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(planeScene("kinect", 640, 480)).front().noisy)), 1);
+  SceneOptions stereo = planeScene("stereo", 640, 480);
+  stereo.stereo_correlation_length = 6.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 2); // 2 at 640 columns
+  SceneOptions wide = planeScene("stereo", 1280, 720);
+  wide.stereo_correlation_length = 8.0;
+  wide.stereo_correlated_share = 0.9;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(wide).front().noisy)), 4); // 4 at 1280 columns
+  // The boxes scene without noise at 200 x 150: its edges and curvature alone do not look like
+  // correlated noise at the short lags used there.
+  SceneOptions small = planeScene("laser", 200, 150);
+  small.scene = SceneType::boxes;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(small).front().noisy)), 1);
+  // No valid point: nothing to estimate, contiguous windows.
+  Grid empty(64, 48);
+  EXPECT_EQ(automaticDilation(empty), 1);
+}
+
+TEST(Dilation, EachPhaseIsFilteredAsAFrameOfItsOwn)
+{
+  SceneOptions o = planeScene("stereo", 61, 47); // odd sizes: phases of different sizes
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  const Grid frame = gridOf(renderSequence(o).front().noisy);
+  FilterParameters p = FilterParameters::recommended();
+  p.iterations = 1;
+  p.search_window = 5;
+  p.dilation = 2;
+  const FilterRun dilated = runFilter({&frame}, 0, p, kOrigin, {});
+
+  FilterParameters contiguous = p;
+  contiguous.dilation = 1;
+  Grid expected = frame;
+  for (int v0 = 0; v0 < 2; ++v0)
+    for (int u0 = 0; u0 < 2; ++u0) {
+      const int w = (frame.width - u0 + 1) / 2, h = (frame.height - v0 + 1) / 2;
+      Grid phase(w, h);
+      for (int b = 0; b < h; ++b)
+        for (int a = 0; a < w; ++a) {
+          const std::size_t from = static_cast<std::size_t>(v0 + 2 * b) * frame.width + u0 + 2 * a, to = b * w + a;
+          phase.x[to] = frame.x[from], phase.y[to] = frame.y[from], phase.z[to] = frame.z[from];
+          phase.valid[to] = frame.valid[from];
+        }
+      const FilterRun out = runFilter({&phase}, 0, contiguous, kOrigin, {});
+      for (int b = 0; b < h; ++b)
+        for (int a = 0; a < w; ++a) {
+          const std::size_t to = static_cast<std::size_t>(v0 + 2 * b) * frame.width + u0 + 2 * a, from = b * w + a;
+          expected.x[to] = out.output.x[from], expected.y[to] = out.output.y[from];
+          expected.z[to] = out.output.z[from];
+        }
+    }
+  ASSERT_EQ(dilated.output.size(), expected.size());
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    ASSERT_EQ(dilated.output.valid[i], frame.valid[i]) << i;
+    if (!frame.valid[i])
+      continue;
+    EXPECT_EQ(dilated.output.z[i], expected.z[i]) << i;
+    EXPECT_EQ(dilated.output.x[i], expected.x[i]) << i;
+    moved += dilated.output.z[i] != frame.z[i];
+  }
+  EXPECT_GT(moved, expected.size() / 2);
+
+  // With two passes the last one runs with contiguous windows on the whole frame.
+  p.iterations = 2;
+  const FilterRun two = runFilter({&frame}, 0, p, kOrigin, {});
+  FilterParameters last = contiguous;
+  last.iterations = 1;
+  const FilterRun expected_two = runFilter({&dilated.output}, 0, last, kOrigin, {});
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    if (frame.valid[i])
+      EXPECT_EQ(two.output.z[i], expected_two.output.z[i]) << i;
+}
+
+TEST(Dilation, IsRefusedBelowZeroAndPaperKeepsContiguousWindows)
+{
+  FilterParameters p;
+  p.dilation = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  EXPECT_EQ(FilterParameters::paper().dilation, 1);
+  EXPECT_EQ(FilterParameters::recommended().dilation, 0);
+}
+
+TEST(FramesMoved, NoiseIsNotMotionAShiftIs)
+{
+  SceneOptions o = planeScene("stereo", 320, 240, 2);
+  o.scene = SceneType::boxes;
+  const auto seq = renderSequence(o);
+  const Grid a = gridOf(seq[0].noisy), b = gridOf(seq[1].noisy);
+  const NormalField n = estimateNormals(a, 7, kOrigin, 0);
+  // A static scene with fresh correlated noise in each frame: not moved.
+  EXPECT_FALSE(framesMoved(a, n, b));
+  // The camera 40 mm closer (about twice this sensor's noise at these ranges): every point 40 mm
+  // nearer along its ray.
+  Grid closer = b;
+  for (std::size_t i = 0; i < closer.size(); ++i) {
+    const float len = std::sqrt(closer.x[i] * closer.x[i] + closer.y[i] * closer.y[i] + closer.z[i] * closer.z[i]);
+    const float f = (len - 0.040f) / len;
+    closer.x[i] *= f, closer.y[i] *= f, closer.z[i] *= f;
+  }
+  EXPECT_TRUE(framesMoved(a, n, closer));
+  // Too few blocks to tell: not moved.
+  Grid tiny(16, 12);
+  EXPECT_FALSE(framesMoved(tiny, estimateNormals(tiny, 3, kOrigin, 0), tiny));
+}
