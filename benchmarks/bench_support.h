@@ -110,7 +110,8 @@ cropCentre(const pcl::PointCloud<pcl::PointXYZ>& cloud, unsigned width, unsigned
 
 /// A copy of `cloud` with fresh depth-camera noise added along each camera ray (from the
 /// sensor origin): Gaussian with sigma(z) = 1.2 mm + 1.9 mm * (z - 0.4 m)^2, z in metres (the
-/// Kinect axial model of METHOD.md). NaN points stay NaN. Deterministic for a given seed.
+/// Kinect axial model of docs/method.md, "Sensor noise models"). NaN points stay NaN.
+/// Deterministic for a given seed.
 pcl::PointCloud<pcl::PointXYZ>
 withFreshNoise(const pcl::PointCloud<pcl::PointXYZ>& cloud, std::uint64_t seed);
 

@@ -1,6 +1,7 @@
 /// \file nonlocal_means_filter.h
 /// \brief Feature-preserving non-local denoising of one organized range frame (Schall, Belyaev,
-/// Seidel 2006, Sec. 3.2; decisions in the README) as a pcl::Filter.
+/// Seidel 2006, Sec. 3.2; the decisions where the paper is loose are in docs/method.md) as a
+/// pcl::Filter.
 #pragma once
 
 #include <range_nlm/core/pipeline.h>

@@ -11,17 +11,19 @@ namespace range_nlm
 class ParameterSetters
 {
 public:
-  /// All parameters at once (validated when filtering).
+  /// All parameters at once (validated when filtering). The setters below change one field each;
+  /// the initial values are FilterParameters::recommended().
   void setParameters(const FilterParameters& p) { parameters_ = p; }
   const FilterParameters& getParameters() const { return parameters_; }
 
-  /// S, odd, pixels (default 7).
+  /// S, side of the search window, odd, pixels (default 9; paper preset 7).
   void setSearchWindowSize(int s) { parameters_.search_window = s; }
   int getSearchWindowSize() const { return parameters_.search_window; }
-  /// P, odd, pixels (default 5).
+  /// P, side of the similarity patch, odd, pixels (default 3; paper preset 5).
   void setPatchSize(int p) { parameters_.patch_size = p; }
   int getPatchSize() const { return parameters_.patch_size; }
-  /// Filter passes (default 1).
+  /// Filter passes; normals and automatic bandwidths are re-estimated before each (default 2;
+  /// paper preset 1).
   void setIterations(int n) { parameters_.iterations = n; }
   int getIterations() const { return parameters_.iterations; }
   /// OpenMP threads, 0 = all (default). Output is independent of it.
@@ -36,16 +38,19 @@ public:
   /// Seed of the bandwidth sample (default 42).
   void setSeed(std::uint64_t seed) { parameters_.seed = seed; }
   std::uint64_t getSeed() const { return parameters_.seed; }
-  /// Side of the normal-estimation neighbourhood, odd >= 3 (default 3, the one-ring).
+  /// Side of the normal-estimation neighbourhood, odd >= 3 (default 7; paper preset 3, the
+  /// one-ring).
   void setNormalWindowSize(int n) { parameters_.normal_window = n; }
   int getNormalWindowSize() const { return parameters_.normal_window; }
-  /// Fast (box-filtered, default) or direct (reference) evaluation.
+  /// Fast (windowed: each window point projected once per pixel, the patch pairs summed in
+  /// vector registers; default) or direct (the literal formula, the reference) evaluation. Both
+  /// give the same result to float precision.
   void setEvaluation(Evaluation e) { parameters_.evaluation = e; }
   Evaluation getEvaluation() const { return parameters_.evaluation; }
-  /// Displacement along the normal (default) or the line of sight.
+  /// Displacement along the normal (default) or along the line of sight (the point stays on its
+  /// camera ray).
   void setDisplacement(Displacement d) { parameters_.displacement = d; }
   Displacement getDisplacement() const { return parameters_.displacement; }
-
 
 protected:
   FilterParameters parameters_ = FilterParameters::recommended();

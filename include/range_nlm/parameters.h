@@ -74,8 +74,8 @@ struct FilterParameters
   static constexpr float automatic = 0.0f;
 
   // The defaults below are the project's recommended setting, measured on generated scenes
-  // against ground truth (README, "Quality"); paper() gives the literal method (7 / 5 / 1 and no
-  // extensions).
+  // against ground truth (docs/quality.md; the levers in docs/method.md); paper() gives the
+  // literal method (7 / 5 / 1 and no extensions).
 
   /// S: side of the square search window N(p_i), pixels. Odd, >= 1, no larger than the cloud.
   /// Default 9 (paper: 7).

@@ -1,4 +1,5 @@
-// Automatic bandwidth estimation (METHOD.md step 4).
+// Automatic bandwidth estimation (docs/method.md, "Automatic bandwidths"): the paper's global
+// estimate, the range-adaptive noise profile and the frame-to-frame noise ratio.
 #include "internal.h"
 
 #include <algorithm>

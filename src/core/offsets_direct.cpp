@@ -1,6 +1,6 @@
-// The literal evaluation of the filter formula (METHOD.md, static and temporal): for every point
-// and every candidate, the patch similarity is summed pair by pair. It is the reference the fast
-// kernel is tested against.
+// The literal evaluation of the filter formula (docs/method.md, "The static filter" and "The
+// temporal filter"): for every point and every candidate, the patch similarity is summed pair by
+// pair. It is the reference the fast kernel is tested against.
 #include "fast_math.h"
 
 #include "internal.h"

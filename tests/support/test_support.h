@@ -41,9 +41,9 @@ crease(int edge_u, double z0, double slope);
 double
 planeRmse(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& n, double c);
 
-/// Naive evaluation of the static filter formula (METHOD.md) in double precision, with normals
-/// from pcl::computePointNormal over the 3x3 neighbourhood, oriented toward the origin, and
-/// fixed bandwidths d, s. Invalid points stay NaN.
+/// Naive evaluation of the static filter formula (docs/method.md, "The static filter") in double
+/// precision, with normals from pcl::computePointNormal over the 3x3 neighbourhood, oriented
+/// toward the origin, and fixed bandwidths d, s. Invalid points stay NaN.
 pcl::PointCloud<pcl::PointXYZ>
 referenceFilter(const pcl::PointCloud<pcl::PointXYZ>& cloud, int search, int patch, double d, double s);
 

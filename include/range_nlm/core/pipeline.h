@@ -1,7 +1,7 @@
 /// \file pipeline.h
-/// \brief The PCL-free pipeline of the non-local range filter (docs/method.md, static and
-/// temporal): normals, bandwidths, offsets and displacement on Grid frames. The pcl::Filter
-/// classes only adapt clouds to these functions.
+/// \brief The PCL-free pipeline of the non-local range filter (docs/method.md, "The static
+/// filter" and "The temporal filter"): normals, bandwidths, offsets and displacement on Grid
+/// frames. The pcl::Filter classes only adapt clouds to these functions.
 #pragma once
 
 #include <range_nlm/core/grid.h>
@@ -49,8 +49,8 @@ Grid
 presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
                    int threads);
 
-/// Automatic bandwidths (docs/method.md, bandwidths), from random valid sample points p_k:
-/// mu_d = mean of the largest distance from p_k to the points of its search window,
+/// Automatic bandwidths (docs/method.md, "Automatic bandwidths"), from random valid sample
+/// points p_k: mu_d = mean of the largest distance from p_k to the points of its search window,
 /// sigma_s = mean of the standard deviation of the offsets of that window to the tangent plane.
 struct Bandwidths
 {
