@@ -1061,6 +1061,7 @@ runComparison(const po::variables_map& vm)
       r.seeds = {1};
       r.include_mls = false;
     }
+    r.render_dir = vm["real-noise-renders"].as<std::string>();
     real_noise::addShippedFrames(r, RANGE_NLM_DATA_DIR, vm["real-noise-data"].as<std::string>());
     real_noise::run(r, log, report, &json_text);
     if (json)
@@ -1292,6 +1293,7 @@ run(int argc, char** argv)
     ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
     ("real-noise", "instead of timing: range_nlm's settings against grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares under realistic sensor noise: generated scenes with the stereo, kinect1, tof and kinect noise models (ground truth), the real frames in data/ (residual of their planar regions, interior and border band) and static real sequences (jitter)")
     ("real-noise-data", po::value<std::string>()->default_value(""), "--real-noise: another folder laid out like data/ whose real frames are also used (e.g. one holding depth-images/realsense-d435-static/pose4 and pose5 for the jitter)")
+    ("real-noise-renders", po::value<std::string>()->default_value(""), "--real-noise: write a flat-shaded image raw | range_nlm default | FastBilateral (sigma_s 5, sigma_r 0.03) of each real frame into this folder")
     ("real-noise-quick", "--real-noise: one noise level and seed per model, without MovingLeastSquares")
     ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")

@@ -2,6 +2,7 @@
 #include "quality_comparison.h"
 
 #include <range_nlm/core/pipeline.h>
+#include <range_nlm/eval/render.h>
 #include <range_nlm/eval/synthetic_scene.h>
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/io/pcd_file.h>
@@ -312,15 +313,29 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
     nlohmann::json& j = out["real"][name];
     j["raw"] = {before.interior_rms * 1e3, before.border_rms * 1e3};
     log << name << ": raw " << mm(before.interior_rms) << " / " << mm(before.border_rms);
+    std::vector<Cloud> results;
     for (const auto* family : {&ours, &fb_real})
       for (const Smoother& s : *family) {
-        const PlanarResidual r = planarResidual(regions, s.apply(raw));
+        results.push_back(s.apply(raw));
+        const PlanarResidual r = planarResidual(regions, results.back());
         report << mm(r.interior_rms) << " / " << mm(r.border_rms) << (r.points_lost ? " (" + std::to_string(r.points_lost) + " lost)" : "") << " | ";
         j[s.family + " " + s.setting] = {r.interior_rms * 1e3, r.border_rms * 1e3, r.points_lost};
         log << "; " << s.family << " " << s.setting << " " << mm(r.interior_rms) << " / " << mm(r.border_rms);
       }
     report << "\n";
     log << std::endl;
+    if (!options.render_dir.empty()) {
+      // raw | range_nlm default (the first variant) | FastBilateral 5 / 0.03 (the first peer).
+      RenderParameters rp;
+      rp.threads = options.threads;
+      const Rgb white{255, 255, 255};
+      const RgbImage image = sideBySide(
+          sideBySide(renderShaded(gridFromCloud(raw), rp), renderShaded(gridFromCloud(results.front()), rp), rp.gap,
+                     white),
+          renderShaded(gridFromCloud(results[ours.size()]), rp), rp.gap, white);
+      fs::create_directories(options.render_dir);
+      saveRgbPng((fs::path(options.render_dir) / (fs::path(path).stem().string() + ".png")).string(), image);
+    }
   }
 
   // 3. Static real sequences: jitter of the frames filtered one by one.
