@@ -57,7 +57,7 @@ const char* const kUsage =
     "of one run, byte for byte; N runs may write into one output directory at once (docs/cluster.md).";
 
 /// --recursive with --shard: default frames of history replayed before a shard, per frame of the
-/// pass's radius (docs/cluster.md has the measurement behind it).
+/// largest recursive radius (docs/cluster.md has the measurement behind it).
 constexpr std::size_t kWarmupPerRadius = 8;
 
 /// One filter pass of a schedule: parameters and temporal radius.

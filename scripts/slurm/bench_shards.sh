@@ -6,7 +6,8 @@
 #
 # For each number of shards N: submit.sh IN_DIR WORK_DIR/N-shards N [options], waits for the check
 # job, and prints a Markdown table row from its report: shards, CPUs per task, frames, seconds
-# from the first shard start to the last end, frames/s. RANGE_NLM_CPUS and the other variables
+# from the first shard start to the last end, frames/s, and the filtering time summed over the
+# shards (which grows with N by the halo frames each shard filters too). RANGE_NLM_CPUS and the other variables
 # of submit.sh apply. Runs one N at a time so that the runs do not compete.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -14,8 +15,8 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 in_dir=$1 work=$2 counts=$3
 shift 3
 mkdir -p "$work"
-echo "| shards | CPUs per task | frames | seconds (first start to last end) | frames/s |"
-echo "|---:|---:|---:|---:|---:|"
+echo "| shards | CPUs per task | frames | seconds (first start to last end) | frames/s | filtering, s (sum over shards) |"
+echo "|---:|---:|---:|---:|---:|---:|"
 for n in $counts; do
   out="$work/$n-shards"
   rm -rf "$out" "$out.logs"
@@ -28,5 +29,6 @@ for n in $counts; do
   frames=$(sed -n 's/.* \([0-9]*\) frames written.*/\1/p' "$report")
   span=$(sed -n 's/.*, \([0-9.]*\) s from the first shard start.*/\1/p' "$report")
   rate=$(sed -n 's/.*: \([0-9.]*\) frames\/s.*/\1/p' "$report")
-  echo "| $n | ${RANGE_NLM_CPUS:-2} | $frames | $span | $rate |"
+  filtering=$(sed -n 's/^time: \([0-9.]*\) s of filtering.*/\1/p' "$report")
+  echo "| $n | ${RANGE_NLM_CPUS:-2} | $frames | $span | $rate | $filtering |"
 done
