@@ -187,6 +187,8 @@ private:
                         << "JobCompType=jobcomp/none\nMpiDefault=none\n"
                         << "SelectType=select/cons_tres\nSelectTypeParameters=CR_CPU\n"
                         << "SchedulerType=sched/backfill\nReturnToService=2\n"
+                        // CPUs=2 whatever the machine has, so that the node is not drained.
+                        << "SlurmdParameters=config_overrides\n"
                         << "NodeName=localhost NodeAddr=127.0.0.1 CPUs=2 State=UNKNOWN\n"
                         << "PartitionName=debug Nodes=localhost Default=YES MaxTime=INFINITE State=UP\n";
     ::setenv("SLURM_CONF", conf.c_str(), 1); // for the daemons, sbatch, squeue, sinfo and the jobs
