@@ -498,7 +498,8 @@ addOptions(po::options_description& options)
      "auto = png for an OUTPUT.png, else the format of the input")
     ("shard", po::value<std::string>(),
      "K/N: write only the K-th (from 0) of N contiguous parts of the frames, reading the frames around it that "
-     "the temporal windows need (the N parts together are byte-identical to one run); 'slurm': K and N of this "
+     "the temporal windows need (the N parts together are byte-identical to one run; --recursive: see "
+     "--shard-warmup); 'slurm': K and N of this "
      "task of a Slurm job array (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, SLURM_ARRAY_TASK_COUNT)")
     ("shard-warmup", po::value<std::string>(),
      ("--recursive with --shard: frames of history each recursive pass replays before its shard, or 'all' "
@@ -861,8 +862,10 @@ printJson(const Summary& s, const Job& job)
                     {"frames", plan.writes.size()},
                     {"first_frame_read", plan.reads.front().begin},
                     {"frames_read", plan.reads.front().size()}};
-    if (job.warmup != kWholeHistory)
-      out["shard"]["warmup"] = job.warmup;
+    const bool recursive = std::any_of(job.passes.begin(), job.passes.end(),
+                                       [](const Pass& p) { return p.recursive && p.radius > 0; });
+    if (recursive)
+      out["shard"]["warmup"] = job.warmup == kWholeHistory ? nlohmann::json("all") : nlohmann::json(job.warmup);
   }
   // Non-finite numbers (an infinite bandwidth) become null; invalid UTF-8 in a file name is
   // replaced rather than ending the run.
