@@ -276,14 +276,30 @@ protected:
   fs::path dir_;
 };
 
-/// Waits until the cluster has no job left; false after `seconds`.
+/// The first task log in `logs` that reports a failed range_nlm_denoise ("" if none).
+std::string
+failedTask(const fs::path& logs)
+{
+  if (fs::exists(logs))
+    for (const auto& entry : fs::directory_iterator(logs)) {
+      const std::string text = test::readBytes(entry.path().string());
+      if (text.find("exit_status=") != std::string::npos && text.find("exit_status=0") == std::string::npos)
+        return entry.path().string() + ":\n" + text;
+    }
+  return "";
+}
+
+/// Waits until the cluster has no job left; false after `seconds`, or as soon as a task in
+/// `logs` has failed (the check job would then wait for ever on its afterok dependency).
 bool
-waitForJobs(int seconds)
+waitForJobs(int seconds, const fs::path& logs = fs::path())
 {
   const auto deadline = Clock::now() + std::chrono::seconds(seconds);
   while (Clock::now() < deadline) {
     if (test::runCommand("squeue -h").output.empty())
       return true;
+    if (!logs.empty() && !failedTask(logs).empty())
+      return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(250));
   }
   return false;
@@ -327,10 +343,10 @@ TEST_F(SlurmClusterTest, JobArrayOfShardsWritesWhatOneMachineWrites)
   ASSERT_TRUE(std::regex_search(submitted.output, ids, std::regex("array job ([0-9]+) .*check job ([0-9]+)")))
       << submitted.output;
   const std::string array_job = ids[1], check_job = ids[2];
-  ASSERT_TRUE(waitForJobs(90)) << "jobs still queued after 90 s:\n"
-                               << test::runCommand("squeue").output << cluster->logs();
-
   const fs::path logs = dir_ / "sharded.logs";
+  ASSERT_TRUE(waitForJobs(90, logs)) << "jobs left after 90 s or a failed task:\n"
+                                     << test::runCommand("squeue").output << failedTask(logs) << cluster->logs();
+
   const std::string check = test::readBytes((logs / ("range_nlm-check-" + check_job + ".out")).string());
   EXPECT_NE(check.find("30 input frames in " + in.string() + ", 30 outputs in " + out.string() + ", 0 missing"),
             std::string::npos)
