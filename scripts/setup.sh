@@ -3,7 +3,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 packages=(cmake g++ make libpcl-dev pcl-tools libeigen3-dev libflann-dev libboost-program-options-dev
-          libgtest-dev libpng-dev nlohmann-json3-dev clang-14 libclang-rt-14-dev valgrind)
+          libgtest-dev libpng-dev nlohmann-json3-dev clang-14 libclang-rt-14-dev valgrind
+          slurm-wlm munge)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,6 +1,7 @@
 // range_nlm_denoise: filters one organized PCD frame, or every frame of a directory (optionally
 // with the temporal filter, in one or several passes), keeping every field of the input.
 #include "cli/cli.h"
+#include "cli/shard.h"
 
 #include <range_nlm/eval/render.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
@@ -39,6 +40,7 @@ const char* const kUsage =
     "  range_nlm_denoise --input-dir DIR --output-dir DIR [--temporal-radius R [--causal]] [options]\n"
     "  range_nlm_denoise --input-dir DIR --output-dir DIR --pass search=19,patch=11,radius=1 --pass "
     "search=11,patch=5,radius=0\n"
+    "  range_nlm_denoise --input-dir DIR --output-dir DIR --shard K/N [options]\n"
     "Filters organized range frames with the feature-preserving non-local filter. Every field of\n"
     "the input is kept; only x, y, z move. Outputs are binary PCD.\n"
     "16-bit depth PNGs (INPUT.png, or a directory of *.png) are read with the intrinsics options;\n"
@@ -49,7 +51,14 @@ const char* const kUsage =
     "sequence) stops the run after every frame before it is written, or with --keep-going is\n"
     "skipped and listed at the end.\n"
     "Exit status: 0 done, 1 error (a frame could not be read or written), 2 usage error,\n"
-    "3 done with --keep-going but some frames were skipped.";
+    "3 done with --keep-going but some frames were skipped.\n"
+    "--shard K/N writes only the K-th of N contiguous parts of the frames (K from 0), reading the\n"
+    "frames around it that its temporal windows need, so that the N parts together are the output\n"
+    "of one run, byte for byte; N runs may write into one output directory at once (docs/cluster.md).";
+
+/// --recursive with --shard: default frames of history replayed before a shard, per frame of the
+/// largest recursive radius (docs/cluster.md has the measurement behind it).
+constexpr std::size_t kWarmupPerRadius = 8;
 
 /// One filter pass of a schedule: parameters and temporal radius.
 struct Pass
@@ -59,7 +68,22 @@ struct Pass
   bool causal = false;
   /// Neighbours are the last `radius` filtered outputs (TemporalWindow::recursive).
   bool recursive = false;
+
+  TemporalWindow window() const
+  {
+    return recursive ? TemporalWindow::recursive : causal ? TemporalWindow::causal : TemporalWindow::centred;
+  }
+  PassReach reach() const { return {radius, window()}; }
 };
+
+std::vector<PassReach>
+reachOf(const std::vector<Pass>& passes)
+{
+  std::vector<PassReach> reach;
+  for (const Pass& pass : passes)
+    reach.push_back(pass.reach());
+  return reach;
+}
 
 Pass
 parsePass(const std::string& spec, const Pass& base)
@@ -119,6 +143,9 @@ struct PendingFrame
   /// --resume: its output is complete already (a recursive pass still filters it, for the
   /// history of the frames after it, but it is not written again).
   bool finished = false;
+  /// --shard: a frame of the halo around the shard, read as a neighbour only; another shard
+  /// writes it (and reports it if it cannot be read).
+  bool halo = false;
 };
 
 struct FrameReport
@@ -129,24 +156,6 @@ struct FrameReport
   /// Why it was written unchanged (empty: filtered).
   std::string unfiltered;
 };
-
-/// The frames a pass reads to filter the `needed` ones.
-std::vector<bool>
-framesRead(const Pass& pass, const std::vector<bool>& needed)
-{
-  std::vector<bool> read(needed.size(), false);
-  if (pass.recursive && pass.radius > 0) { // every output carries the history before it
-    const auto last = std::find(needed.rbegin(), needed.rend(), true);
-    std::fill(read.begin(), read.begin() + (needed.rend() - last), true);
-    return read;
-  }
-  const std::size_t r = static_cast<std::size_t>(pass.radius);
-  for (std::size_t t = 0; t < needed.size(); ++t)
-    if (needed[t])
-      for (std::size_t k = t >= r ? t - r : 0; k <= (pass.causal ? t : std::min(t + r, needed.size() - 1)); ++k)
-        read[k] = true;
-  return read;
-}
 
 /// What became of one input frame that came out of the chain.
 struct ChainOutput
@@ -160,23 +169,22 @@ class PassChain
 {
 public:
   /// `wanted[t]`: the result of frame t is to be written. From the last pass back, each pass
-  /// filters only the frames that the next one reads.
-  PassChain(const std::vector<Pass>& passes, const std::vector<bool>& wanted, StageObserver* observer)
+  /// filters only the frames that the next one reads. A recursive pass at `level` starts its
+  /// history at frame `history_begin[level]` (0: the whole history).
+  PassChain(const std::vector<Pass>& passes, const std::vector<bool>& wanted,
+            const std::vector<std::size_t>& history_begin, StageObserver* observer)
   {
     std::vector<std::vector<bool>> needed(passes.size());
     std::vector<bool> next = wanted;
     for (std::size_t level = passes.size(); level-- > 0;) {
       needed[level] = next;
-      next = framesRead(passes[level], next);
+      next = framesRead(passes[level].reach(), next, history_begin[level]);
     }
     inputs_read_ = next;
     for (std::size_t level = 0; level < passes.size(); ++level) {
-      const TemporalWindow window = passes[level].recursive ? TemporalWindow::recursive
-                                    : passes[level].causal  ? TemporalWindow::causal
-                                                            : TemporalWindow::centred;
-      levels_.push_back({std::make_unique<TemporalStream<pcl::PointXYZ>>(passes[level].radius, window,
+      levels_.push_back({std::make_unique<TemporalStream<pcl::PointXYZ>>(passes[level].radius, passes[level].window(),
                                                                           passes[level].parameters),
-                         needed[level], 0, {}});
+                         needed[level], 0, 0, {}});
       levels_.back().stream->setStageObserver(observer);
     }
   }
@@ -192,7 +200,7 @@ private:
   {
     std::unique_ptr<TemporalStream<pcl::PointXYZ>> stream;
     std::vector<bool> needed;
-    std::size_t pushed = 0;
+    std::size_t pushed = 0, emitted = 0;
     std::deque<TemporalStream<pcl::PointXYZ>::OutputInfo> carried;
   };
 
@@ -204,7 +212,9 @@ private:
     // from the earlier passes is carried along (first problem, first pass's bandwidths, time).
     auto take = [&](const std::vector<TemporalStream<pcl::PointXYZ>::CloudPtr>& ready) {
       for (std::size_t i = 0; i < ready.size(); ++i) {
-        ChainOutput o{ready[i], l.stream->lastOutputs()[i]};
+        // A recursive pass filters frames nothing needs too (its history); passed on as null, the
+        // next recursive pass starts its own history exactly where the plan says.
+        ChainOutput o{l.needed[l.emitted++] ? ready[i] : nullptr, l.stream->lastOutputs()[i]};
         const TemporalStream<pcl::PointXYZ>::OutputInfo before = l.carried.front();
         l.carried.pop_front();
         if (level > 0) {
@@ -232,7 +242,8 @@ private:
 
 /// For --resume: removes the temporary files an interrupted run left beside `outputs`
 /// (".NAME.tmpPID", see saveCloudAtomic). The caller holds the output directory exclusively
-/// (OutputDirectoryLock), so no running range_nlm_denoise can own one of them.
+/// (OutputDirectoryLock), or with --shard those outputs (FrameRangeLock), so no running
+/// range_nlm_denoise can own one of them.
 void
 removeTemporaries(const std::vector<std::string>& outputs)
 {
@@ -286,6 +297,75 @@ public:
   OutputDirectoryLock& operator=(const OutputDirectoryLock&) = delete;
 
 private:
+  int fd_ = -1;
+};
+
+/// Holds the frames a --shard run writes, so that shards of one recording can write into one
+/// output directory at once while two runs that would write the same frame cannot: an exclusive
+/// lock on the byte range [first frame, last frame + 1) of OUTPUT_DIR/.range_nlm_denoise.lock,
+/// frame indices in the input's name order. Any two overlapping shards conflict, whatever their
+/// N. Open file description locks (F_OFD_SETLK; the kernel releases them however the process
+/// ends) are POSIX record locks, which NFS passes to the server, so shards on different nodes of
+/// a cluster exclude each other on a shared file system too. The file stays (empty) behind.
+class FrameRangeLock
+{
+public:
+  static constexpr const char* kFileName = ".range_nlm_denoise.lock";
+
+  FrameRangeLock(const std::string& directory, const FrameRange& frames, const std::vector<std::string>& inputs)
+  {
+    if (frames.empty())
+      return; // writes nothing
+    const std::string path = joinPath(directory, kFileName);
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    if (fd_ < 0)
+      throw InputError("cannot open the lock file '" + path + "' of the shards: " + std::strerror(errno));
+    struct flock range = {};
+    range.l_type = F_WRLCK;
+    range.l_whence = SEEK_SET;
+    range.l_start = static_cast<off_t>(frames.begin);
+    range.l_len = static_cast<off_t>(frames.size());
+    int command = F_OFD_SETLK;
+    int result = ::fcntl(fd_, command, &range);
+    if (result != 0 && errno == EINVAL) { // no open file description locks: the process's own
+      command = F_SETLK;
+      result = ::fcntl(fd_, command, &range);
+    }
+    if (result == 0)
+      return;
+    const int error = errno;
+    struct flock holder = range;
+    const bool known = ::fcntl(fd_, command == F_OFD_SETLK ? F_OFD_GETLK : F_GETLK, &holder) == 0 &&
+                       holder.l_type != F_UNLCK;
+    ::close(fd_);
+    fd_ = -1;
+    if (error != EAGAIN && error != EACCES)
+      throw InputError("cannot lock frames in '" + path + "': " + std::strerror(error));
+    std::string message = "frames " + describe(frames, inputs) + " of output directory '" + directory +
+                          "' are being written by another range_nlm_denoise run";
+    if (known) {
+      const std::size_t first = static_cast<std::size_t>(holder.l_start);
+      const std::size_t end = holder.l_len == 0 ? inputs.size() : first + static_cast<std::size_t>(holder.l_len);
+      message += " (holding frames " + describe({first, std::min(end, inputs.size())}, inputs) + ")";
+    }
+    throw InputError(message + "; wait for it to end, or give each run its own shard");
+  }
+  ~FrameRangeLock()
+  {
+    if (fd_ >= 0)
+      ::close(fd_);
+  }
+  FrameRangeLock(const FrameRangeLock&) = delete;
+  FrameRangeLock& operator=(const FrameRangeLock&) = delete;
+
+private:
+  static std::string describe(const FrameRange& frames, const std::vector<std::string>& inputs)
+  {
+    std::string text = std::to_string(frames.begin) + ".." + std::to_string(frames.end - 1);
+    if (frames.end <= inputs.size() && !frames.empty())
+      text += " (" + fileName(inputs[frames.begin]) + " .. " + fileName(inputs[frames.end - 1]) + ")";
+    return text;
+  }
   int fd_ = -1;
 };
 
@@ -381,6 +461,11 @@ struct Job
   DepthIntrinsics intrinsics;
   OutputOptions output;
   bool resume = false, keep_going = false, quiet = false, json = false;
+  /// The frames written and read (directory mode; without --shard: every frame, shard 0 of 1).
+  bool sharded = false;
+  Shard shard;
+  std::size_t warmup = kWholeHistory;
+  ShardPlan plan;
 };
 
 void
@@ -410,10 +495,66 @@ addOptions(po::options_description& options)
      "half-range of the --colorize colour scale, 1 / cloud unit (0 = 95th percentile of |H| of each frame)")
     ("output-format", po::value<std::string>()->default_value("auto"),
      "pcd or png (16-bit depth = round(z * --depth-scale); x, y are not stored, so use --line-of-sight); "
-     "auto = png for an OUTPUT.png, else the format of the input");
+     "auto = png for an OUTPUT.png, else the format of the input")
+    ("shard", po::value<std::string>(),
+     "K/N: write only the K-th (from 0) of N contiguous parts of the frames, reading the frames around it that "
+     "the temporal windows need (the N parts together are byte-identical to one run; --recursive: see "
+     "--shard-warmup); 'slurm': K and N of this "
+     "task of a Slurm job array (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, SLURM_ARRAY_TASK_COUNT)")
+    ("shard-warmup", po::value<std::string>(),
+     ("--recursive with --shard: frames of history each recursive pass replays before its shard, or 'all' "
+     "(exact, but every shard reads from the first frame) [default: " +
+     std::to_string(kWarmupPerRadius) + " x the radius]").c_str());
   // clang-format on
   addFilterOptions(options);
   addDepthImageOptions(options);
+}
+
+/// --shard and --shard-warmup: the frames this run writes and reads.
+void
+shardFrom(const po::variables_map& vm, Job& job)
+{
+  job.sharded = vm.count("shard") > 0;
+  bool recursive = false;
+  std::size_t radius = 0;
+  for (const Pass& pass : job.passes)
+    if (pass.recursive && pass.radius > 0) {
+      recursive = true;
+      radius = std::max(radius, static_cast<std::size_t>(pass.radius));
+    }
+  if (vm.count("shard-warmup")) {
+    const std::string text = vm["shard-warmup"].as<std::string>();
+    if (!job.sharded)
+      throw UsageError("--shard-warmup " + text + " needs --shard");
+    if (!recursive)
+      throw UsageError("--shard-warmup " + text +
+                       " applies to --recursive runs only (other schedules are cut exactly, without warm-up)");
+    if (text == "all") {
+      job.warmup = kWholeHistory;
+    } else {
+      try {
+        std::size_t used = 0;
+        const long long v = std::stoll(text, &used);
+        if (used != text.size() || v < 0)
+          throw std::invalid_argument(text);
+        job.warmup = static_cast<std::size_t>(v);
+      } catch (const std::exception&) {
+        throw UsageError("--shard-warmup must be a number of frames >= 0 or 'all', got '" + text + "'");
+      }
+    }
+  } else if (job.sharded) {
+    job.warmup = kWarmupPerRadius * radius;
+  }
+  if (job.sharded) {
+    if (job.single)
+      throw UsageError("--shard cuts a directory of frames; give --input-dir and --output-dir");
+    job.shard = parseShard(vm["shard"].as<std::string>(), [](const char* name) { return std::getenv(name); });
+    std::error_code ec;
+    if (std::filesystem::equivalent(vm["input-dir"].as<std::string>(), job.output_dir, ec))
+      throw UsageError("--shard cannot write into the input directory: a shard would read frames another shard has "
+                       "already filtered as its neighbours");
+  }
+  job.plan = planShard(job.inputs.size(), job.shard, reachOf(job.passes), job.warmup);
 }
 
 Job
@@ -471,6 +612,7 @@ jobFrom(const po::variables_map& vm)
   if (!job.single)
     for (std::string& output : job.outputs)
       output = replaceExtension(output, job.output.png ? ".png" : ".pcd");
+  shardFrom(vm, job);
   return job;
 }
 
@@ -489,10 +631,14 @@ struct Summary
 class FrameRun
 {
 public:
+  /// Frames are pushed from the first frame the shard reads on; index i of wanted_ and of the
+  /// chain is frame reads_.begin + i (without --shard: every frame, from 0).
   explicit FrameRun(const Job& job)
-      : job_(job), wanted_(job.inputs.size(), true),
-        progress_("range_nlm_denoise", job.inputs.size(), iterationsPerFrame(job.passes), !job.quiet)
+      : job_(job), reads_(job.plan.reads.front()), wanted_(reads_.size(), false),
+        progress_("range_nlm_denoise", job.plan.writes.size(), iterationsPerFrame(job.passes), !job.quiet)
   {
+    for (std::size_t f = job.plan.writes.begin; f < job.plan.writes.end; ++f)
+      wanted_[f - reads_.begin] = true;
   }
 
   /// Runs to the end; throws InputError (after writing every frame it could) for a frame that
@@ -500,19 +646,24 @@ public:
   Summary run()
   {
     const auto start = std::chrono::steady_clock::now();
-    if (job_.resume) {
-      removeTemporaries(job_.outputs);
+    const FrameRange& writes = job_.plan.writes;
+    if (job_.resume && !writes.empty()) {
+      removeTemporaries({job_.outputs.begin() + writes.begin, job_.outputs.begin() + writes.end});
       resumeFrom();
     }
-    PassChain chain(job_.passes, wanted_, &progress_);
+    std::vector<std::size_t> history_begin; // of each recursive pass, counted from reads_.begin
+    for (const FrameRange& read : job_.plan.reads)
+      history_begin.push_back(read.begin >= reads_.begin ? read.begin - reads_.begin : 0);
+    PassChain chain(job_.passes, wanted_, history_begin, &progress_);
     std::size_t deferred = 0; // unreadable frames before the sequence's size is known
-    for (std::size_t f = 0; f < job_.inputs.size(); ++f) {
-      if (!chain.inputRead(f)) { // finished, and no frame still to filter reads it
-        pending_.push_back(PendingFrame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", true});
+    for (std::size_t f = reads_.begin; f < reads_.end; ++f) {
+      const bool halo = !writes.contains(f);
+      if (!chain.inputRead(f - reads_.begin)) { // finished, and no frame still to filter reads it
+        pending_.push_back(PendingFrame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", true, halo});
         finish(filtered([&] { return chain.push(nullptr); }));
         continue;
       }
-      PendingFrame frame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", !wanted_[f]};
+      PendingFrame frame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", !wanted_[f - reads_.begin], halo};
       Cloud::Ptr xyz;
       try {
         frame.loaded = loadFrame(job_.inputs[f], job_.intrinsics);
@@ -541,7 +692,8 @@ public:
       finish(filtered([&] { return chain.push(xyz); }));
     }
     for (; deferred > 0; --deferred) { // nothing could be read at all
-      summary_.unreadable.emplace_back(fileName(pending_.front().input_path), pending_.front().unreadable);
+      if (!pending_.front().halo)
+        summary_.unreadable.emplace_back(fileName(pending_.front().input_path), pending_.front().unreadable);
       pending_.pop_front();
     }
     finish(filtered([&] { return chain.flush(); }));
@@ -575,7 +727,7 @@ private:
   /// --resume: which outputs are complete already.
   void resumeFrom()
   {
-    for (std::size_t f = 0; f < job_.inputs.size(); ++f) {
+    for (std::size_t f = job_.plan.writes.begin; f < job_.plan.writes.end; ++f) {
       if (summary_.width == 0) {
         try {
           const LoadedCloud first = loadFrame(job_.inputs[f], job_.intrinsics);
@@ -585,7 +737,7 @@ private:
           continue; // reported when the frame's turn comes
         }
       }
-      wanted_[f] = !isFinishedOutput(job_.outputs[f], job_.output.png, job_.intrinsics, summary_.width,
+      wanted_[f - reads_.begin] = !isFinishedOutput(job_.outputs[f], job_.output.png, job_.intrinsics, summary_.width,
                                      summary_.height);
     }
   }
@@ -618,6 +770,8 @@ private:
       PendingFrame frame = std::move(pending_.front());
       pending_.pop_front();
       const std::string name = fileName(frame.output_path);
+      if (frame.halo)
+        continue; // another shard's frame
       if (!frame.unreadable.empty()) {
         summary_.unreadable.emplace_back(fileName(frame.input_path), frame.unreadable);
       } else if (!result.cloud || frame.finished) { // --resume: finished before
@@ -642,14 +796,33 @@ private:
   }
 
   const Job& job_;
+  FrameRange reads_;
   std::vector<bool> wanted_;
   Progress progress_;
   std::deque<PendingFrame> pending_;
   Summary summary_;
 };
 
+/// What a shard writes and reads, for the first line of its output.
+std::string
+shardLine(const Job& job)
+{
+  const ShardPlan& plan = job.plan;
+  std::ostringstream line;
+  line << "shard " << job.shard.index << "/" << job.shard.count << ": ";
+  if (plan.writes.empty()) {
+    line << "no frames to write (" << job.inputs.size() << " frames, " << job.shard.count << " shards)";
+    return line.str();
+  }
+  auto name = [&](std::size_t f) { return fileName(job.inputs[f]); };
+  line << "frames " << plan.writes.begin << ".." << plan.writes.end - 1 << " of " << job.inputs.size() << " ("
+       << name(plan.writes.begin) << " .. " << name(plan.writes.end - 1) << "), reading frames "
+       << plan.reads.front().begin << ".." << plan.reads.front().end - 1;
+  return line.str();
+}
+
 void
-printJson(const Summary& s)
+printJson(const Summary& s, const Job& job)
 {
   nlohmann::json out;
   double total = 0.0;
@@ -680,6 +853,20 @@ printJson(const Summary& s)
   out["filter_ms_total"] = total;
   out["wall_ms"] = s.wall_ms;
   out["outputs"] = outputs;
+  if (job.sharded) {
+    const ShardPlan& plan = job.plan;
+    out["shard"] = {{"index", job.shard.index},
+                    {"count", job.shard.count},
+                    {"sequence_frames", job.inputs.size()},
+                    {"first_frame", plan.writes.begin},
+                    {"frames", plan.writes.size()},
+                    {"first_frame_read", plan.reads.front().begin},
+                    {"frames_read", plan.reads.front().size()}};
+    const bool recursive = std::any_of(job.passes.begin(), job.passes.end(),
+                                       [](const Pass& p) { return p.recursive && p.radius > 0; });
+    if (recursive)
+      out["shard"]["warmup"] = job.warmup == kWholeHistory ? nlohmann::json("all") : nlohmann::json(job.warmup);
+  }
   // Non-finite numbers (an infinite bandwidth) become null; invalid UTF-8 in a file name is
   // replaced rather than ending the run.
   std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
@@ -696,13 +883,20 @@ run(int argc, char** argv)
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
   const Job job = jobFrom(vm);
+  // Shards of one recording share the directory and hold their own frames.
   const OutputDirectoryLock lock(job.single ? std::filesystem::path(job.outputs.front()).parent_path().string()
                                              : job.output_dir,
-                                  !job.single || job.resume);
+                                  job.sharded ? false : !job.single || job.resume);
+  std::unique_ptr<FrameRangeLock> frames_lock;
+  if (job.sharded) {
+    frames_lock = std::make_unique<FrameRangeLock>(job.output_dir, job.plan.writes, job.inputs);
+    if (!job.quiet && !job.json)
+      std::cout << shardLine(job) << std::endl;
+  }
   FrameRun frames(job);
   const Summary summary = frames.run();
   if (job.json)
-    printJson(summary);
+    printJson(summary, job);
   std::size_t unfiltered = 0;
   for (const FrameReport& r : summary.written)
     unfiltered += !r.unfiltered.empty();

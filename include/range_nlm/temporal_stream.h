@@ -26,8 +26,10 @@ enum class TemporalWindow
   /// The last r filtered outputs and frame t: no output delay, and the history of the whole
   /// sequence carried along, like an exponential moving average that is motion- and edge-aware
   /// (a patch that moved is not similar, so it gets no weight). Memory and time per frame do
-  /// not grow with the sequence. Every frame is filtered (`wanted` of push() is ignored), since
-  /// each output is the next frame's neighbour.
+  /// not grow with the sequence. Every frame pushed is filtered (`wanted` of push() is ignored),
+  /// since each output is the next frame's neighbour, except a null frame (not wanted): it comes
+  /// out null and ends the history, so the frame after it is filtered as the first of a sequence
+  /// (how a run over part of a recording starts its history at a chosen frame).
   recursive
 };
 

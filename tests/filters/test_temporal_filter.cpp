@@ -375,3 +375,35 @@ TEST(TemporalFilter, RecursiveModeUsesNoFutureFrameAndHoldsBoundedMemory)
     alone.emplace_back(new Cloud(staticFilter(*f, p)));
   EXPECT_LT(temporalStd(recursive, 3, 9), 0.8 * temporalStd(alone, 3, 9));
 }
+
+TEST(TemporalFilter, RecursiveModeStartsANewHistoryAfterANullFrame)
+{
+  // A null frame (not wanted) comes out null and ends the history: the frames after it come out
+  // exactly as from a stream that starts with them (how a shard of a recording starts its
+  // history at a chosen frame). Frames before it are as without the gap.
+  FilterParameters p = FilterParameters::recommended();
+  p.threads = 1;
+  const auto frames = sequence(9, 1, 0.004, 800);
+  TemporalStream<pcl::PointXYZ> gap(2, TemporalWindow::recursive, p), whole(2, TemporalWindow::recursive, p),
+      fresh(2, TemporalWindow::recursive, p);
+  for (std::size_t t = 0; t < frames.size(); ++t) {
+    const auto out_whole = whole.push(frames[t]);
+    const auto out_gap = gap.push(t == 4 ? nullptr : frames[t], t != 4);
+    ASSERT_EQ(out_gap.size(), 1u);
+    if (t == 4) {
+      EXPECT_FALSE(out_gap[0]) << "the gap comes out null";
+      continue;
+    }
+    if (t < 4) {
+      EXPECT_EQ(maxDistance(*out_gap[0], *out_whole[0]), 0.0) << "frame " << t;
+      continue;
+    }
+    const auto out_fresh = fresh.push(frames[t]);
+    EXPECT_EQ(maxDistance(*out_gap[0], *out_fresh[0]), 0.0) << "frame " << t << " does not start a new history";
+    if (t == 5)
+      EXPECT_GT(maxDistance(*out_gap[0], *out_whole[0]), 0.0) << "the whole history would have changed frame 5";
+  }
+  EXPECT_LE(gap.heldFrames(), 3u);
+  // A wanted frame must not be null.
+  EXPECT_THROW(gap.push(nullptr, true), std::invalid_argument);
+}

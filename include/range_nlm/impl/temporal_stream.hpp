@@ -30,6 +30,10 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   last_outputs_.emplace_back();
   if (!wanted_[t - first_] && !recursive_)
     return nullptr;
+  if (recursive_ && !window_[t - first_]) { // a gap: the frames after it start a new history
+    history_.clear();
+    return nullptr;
+  }
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -39,8 +43,6 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   std::deque<CloudConstPtr> frames;
   std::size_t current = 0;
   if (recursive_) {
-    if (!window_[t - first_])
-      throw std::invalid_argument("range_nlm: frame " + std::to_string(t) + " is null (recursive mode filters every frame)");
     frames = history_;
     current = frames.size();
     frames.push_back(window_[t - first_]);

@@ -1,0 +1,394 @@
+// range_nlm_denoise on a real Slurm cluster: a one-node cluster (munged, slurmctld, slurmd) is
+// brought up on 127.0.0.1 with every file in a temporary directory, scripts/slurm/submit.sh
+// filters a recording as a job array of shards plus a check job, and the outputs must be
+// byte-identical to one run on this machine. Skipped, saying so, where slurm-wlm and munge are
+// not installed (scripts/setup.sh installs them).
+#include "test_support.h"
+
+#include <pcl/io/pcd_io.h>
+
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <pwd.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace range_nlm;
+using Clock = std::chrono::steady_clock;
+
+namespace
+{
+
+const std::string kTool = std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_denoise";
+const fs::path kScripts = fs::path(RANGE_NLM_SOURCE_DIR) / "scripts" / "slurm";
+
+/// The path of an installed program (PATH, then the sbin directories), or "".
+std::string
+findProgram(const std::string& name)
+{
+  std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
+  path += ":/usr/sbin:/sbin:/usr/local/sbin";
+  std::stringstream dirs(path);
+  for (std::string dir; std::getline(dirs, dir, ':');)
+    if (!dir.empty() && ::access((fs::path(dir) / name).c_str(), X_OK) == 0)
+      return (fs::path(dir) / name).string();
+  return "";
+}
+
+/// A TCP port on 127.0.0.1 that nothing listens on now.
+int
+freePort()
+{
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address = {};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0)
+    throw std::runtime_error("cannot find a free port on 127.0.0.1");
+  ::close(fd);
+  return ntohs(address.sin_port);
+}
+
+/// The last lines of a log file.
+std::string
+tail(const fs::path& file, std::size_t lines = 15)
+{
+  std::vector<std::string> all;
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);)
+    all.push_back(line);
+  std::string text = "--- " + file.string() + "\n";
+  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i)
+    text += all[i] + "\n";
+  return text;
+}
+
+bool
+running(pid_t pid)
+{
+  return pid > 0 && ::waitpid(pid, nullptr, WNOHANG) == 0;
+}
+
+/// Ends a process this test started: SIGTERM, then SIGKILL after five seconds.
+void
+stop(pid_t& pid)
+{
+  if (pid <= 0)
+    return;
+  ::kill(pid, SIGTERM);
+  const auto deadline = Clock::now() + std::chrono::seconds(5);
+  while (Clock::now() < deadline && ::waitpid(pid, nullptr, WNOHANG) == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  if (::waitpid(pid, nullptr, WNOHANG) == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+  }
+  pid = -1;
+}
+
+/// A one-node Slurm cluster on 127.0.0.1 with its own munged; everything in `dir`. Torn down
+/// (jobs cancelled, daemons ended) by the destructor, however the test ends.
+class SlurmCluster
+{
+public:
+  explicit SlurmCluster(const fs::path& dir) : dir_(dir)
+  {
+    try {
+      start();
+    } catch (...) {
+      tearDown();
+      throw;
+    }
+  }
+  ~SlurmCluster() { tearDown(); }
+
+  SlurmCluster(const SlurmCluster&) = delete;
+  SlurmCluster& operator=(const SlurmCluster&) = delete;
+
+  /// The daemons' logs, for a failure message.
+  std::string logs() const
+  {
+    std::string text;
+    for (const char* name : {"munged.out", "slurmctld.out", "slurmctld.log", "slurmd.out", "slurmd.log"})
+      if (fs::exists(dir_ / "log" / name))
+        text += tail(dir_ / "log" / name);
+    return text;
+  }
+
+private:
+  void start()
+  {
+    fs::create_directories(dir_ / "munge-key");
+    fs::permissions(dir_ / "munge-key", fs::perms::owner_all, fs::perm_options::replace);
+    fs::create_directories(dir_ / "munge-socket");
+    fs::permissions(dir_ / "munge-socket", fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                                fs::perms::others_read | fs::perms::others_exec,
+                    fs::perm_options::replace);
+    for (const char* sub : {"state", "spool", "log"})
+      fs::create_directories(dir_ / sub);
+
+    // A fresh munge key: 1024 random bytes, readable by its owner only.
+    const fs::path key = dir_ / "munge-key" / "munge.key";
+    {
+      std::random_device random;
+      std::ofstream out(key, std::ios::binary);
+      for (int i = 0; i < 1024; ++i)
+        out.put(static_cast<char>(random() & 0xff));
+    }
+    fs::permissions(key, fs::perms::owner_read, fs::perm_options::replace);
+    const fs::path socket = dir_ / "munge-socket" / "munge.socket";
+    munged_ = test::startProcess({findProgram("munged"), "--foreground", "--force", "--socket=" + socket.string(),
+                                  "--key-file=" + key.string(), "--pid-file=" + (dir_ / "munged.pid").string(),
+                                  "--log-file=" + (dir_ / "log" / "munged.log").string(),
+                                  "--seed-file=" + (dir_ / "munge-key" / "munged.seed").string()},
+                                 (dir_ / "log" / "munged.out").string());
+    waitFor([&] { return fs::exists(socket); }, 20, "munged to create its socket", munged_);
+
+    const passwd* user = ::getpwuid(::geteuid());
+    const std::string user_name = user ? user->pw_name : "root";
+    const fs::path conf = dir_ / "slurm.conf";
+    std::ofstream(conf) << "ClusterName=rnlmtest\n"
+                        << "SlurmctldHost=localhost(127.0.0.1)\n"
+                        << "SlurmctldPort=" << freePort() << "\n"
+                        << "SlurmdPort=" << freePort() << "\n"
+                        << "SlurmUser=" << user_name << "\nSlurmdUser=" << user_name << "\n"
+                        << "AuthType=auth/munge\nCredType=cred/munge\n"
+                        << "AuthInfo=socket=" << socket.string() << "\n"
+                        << "StateSaveLocation=" << (dir_ / "state").string() << "\n"
+                        << "SlurmdSpoolDir=" << (dir_ / "spool").string() << "\n"
+                        << "SlurmctldPidFile=" << (dir_ / "slurmctld.pid").string() << "\n"
+                        << "SlurmdPidFile=" << (dir_ / "slurmd.pid").string() << "\n"
+                        << "SlurmctldLogFile=" << (dir_ / "log" / "slurmctld.log").string() << "\n"
+                        << "SlurmdLogFile=" << (dir_ / "log" / "slurmd.log").string() << "\n"
+                        << "ProctrackType=proctrack/linuxproc\nTaskPlugin=task/none\n"
+                        << "JobAcctGatherType=jobacct_gather/none\nAccountingStorageType=accounting_storage/none\n"
+                        << "JobCompType=jobcomp/none\nMpiDefault=none\n"
+                        << "SelectType=select/cons_tres\nSelectTypeParameters=CR_CPU\n"
+                        << "SchedulerType=sched/backfill\nReturnToService=2\n"
+                        // CPUs=2 whatever the machine has, so that the node is not drained.
+                        << "SlurmdParameters=config_overrides\n"
+                        << "NodeName=localhost NodeAddr=127.0.0.1 CPUs=2 State=UNKNOWN\n"
+                        << "PartitionName=debug Nodes=localhost Default=YES MaxTime=INFINITE State=UP\n";
+    ::setenv("SLURM_CONF", conf.c_str(), 1); // for the daemons, sbatch, squeue, sinfo and the jobs
+    slurmctld_ = test::startProcess({findProgram("slurmctld"), "-D", "-f", conf.string()},
+                                    (dir_ / "log" / "slurmctld.out").string());
+    slurmd_ = test::startProcess({findProgram("slurmd"), "-D", "-f", conf.string(), "-N", "localhost"},
+                                 (dir_ / "log" / "slurmd.out").string());
+    waitFor([] { return test::runCommand("sinfo -h -n localhost -o %t").output == "idle\n"; }, 60,
+            "sinfo to show the node idle", slurmd_);
+  }
+
+  /// Cancels what is left of the jobs, then ends the daemons this test started.
+  void tearDown()
+  {
+    if (running(slurmctld_) && running(slurmd_)) {
+      test::runCommand("scancel --quiet --user=$(id -un)");
+      waitFor([] { return test::runCommand("squeue -h").output.empty(); }, 15, "", -1, false);
+    }
+    stop(slurmd_);
+    stop(slurmctld_);
+    stop(munged_);
+    ::unsetenv("SLURM_CONF");
+  }
+
+  /// Waits up to `seconds` for `done`; throws (with the logs) if it does not come or the process
+  /// `watched` ends first.
+  template <typename Done>
+  void waitFor(const Done& done, int seconds, const std::string& what, pid_t watched, bool required = true) const
+  {
+    const auto deadline = Clock::now() + std::chrono::seconds(seconds);
+    while (Clock::now() < deadline) {
+      if (done())
+        return;
+      if (watched > 0 && !running(watched))
+        throw std::runtime_error("a daemon ended while waiting for " + what + "\n" + logs());
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    if (required)
+      throw std::runtime_error("no " + what + " after " + std::to_string(seconds) + " s\n" + logs());
+  }
+
+  fs::path dir_;
+  pid_t munged_ = -1, slurmctld_ = -1, slurmd_ = -1;
+};
+
+std::string
+frameName(int k)
+{
+  char name[24];
+  std::snprintf(name, sizeof name, "depth_%04d.pcd", k);
+  return name;
+}
+
+std::vector<std::string>
+frameFiles(const fs::path& dir)
+{
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir))
+    if (entry.path().filename().string()[0] != '.')
+      names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+class SlurmClusterTest : public ::testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    for (const char* program : {"munged", "slurmctld", "slurmd", "sbatch", "squeue", "sinfo", "scancel"})
+      if (findProgram(program).empty())
+        GTEST_SKIP() << "skipped: '" << program << "' not found; the one-node Slurm cluster test needs the Debian "
+                     << "packages slurm-wlm and munge (scripts/setup.sh installs them)";
+    if (::geteuid() != 0)
+      GTEST_SKIP() << "skipped: the one-node Slurm cluster test runs slurmd, which needs root (as in CI)";
+    dir_ = fs::temp_directory_path() / ("range_nlm_slurm_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override
+  {
+    if (!dir_.empty())
+      fs::remove_all(dir_);
+  }
+  fs::path dir_;
+};
+
+/// The first task log in `logs` that reports a failed range_nlm_denoise ("" if none).
+std::string
+failedTask(const fs::path& logs)
+{
+  if (fs::exists(logs))
+    for (const auto& entry : fs::directory_iterator(logs)) {
+      const std::string text = test::readBytes(entry.path().string());
+      if (text.find("exit_status=") != std::string::npos && text.find("exit_status=0") == std::string::npos)
+        return entry.path().string() + ":\n" + text;
+    }
+  return "";
+}
+
+/// Waits until the cluster has no job left; false after `seconds`, or as soon as a task in
+/// `logs` has failed (the check job would then wait for ever on its afterok dependency).
+bool
+waitForJobs(int seconds, const fs::path& logs = fs::path())
+{
+  const auto deadline = Clock::now() + std::chrono::seconds(seconds);
+  while (Clock::now() < deadline) {
+    if (test::runCommand("squeue -h").output.empty())
+      return true;
+    if (!logs.empty() && !failedTask(logs).empty())
+      return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  }
+  return false;
+}
+
+} // namespace
+
+TEST_F(SlurmClusterTest, JobArrayOfShardsWritesWhatOneMachineWrites)
+{
+  // A recording of a few dozen small frames: a step that moves, noise and holes.
+  constexpr int kFrames = 30;
+  const fs::path in = dir_ / "recording";
+  fs::create_directories(in);
+  for (int k = 0; k < kFrames; ++k) {
+    auto cloud = test::makeCloud(40, 30, test::step(8 + k % 20, 1.0, 1.3), 0.005, 11 + k);
+    test::punchHoles(cloud, 0.03, 51 + k);
+    pcl::io::savePCDFileBinary((in / frameName(k)).string(), cloud);
+  }
+  // A two-pass temporal schedule: halo 2 + 1 frames on each side of a shard.
+  const std::string options = "--search-window 5 --patch 3 --normal-window 3 --iterations 1 "
+                              "--pass search=5,patch=3,radius=2 --pass search=3,patch=3,radius=1";
+  const fs::path single = dir_ / "single";
+  const test::CommandResult one =
+      test::runCommand(kTool + " --input-dir " + in.string() + " --output-dir " + single.string() + " --quiet " + options);
+  ASSERT_EQ(one.status, 0) << one.output;
+
+  std::unique_ptr<SlurmCluster> cluster;
+  try {
+    cluster = std::make_unique<SlurmCluster>(dir_ / "cluster");
+  } catch (const std::exception& e) {
+    FAIL() << "the one-node Slurm cluster did not come up: " << e.what();
+  }
+
+  // Four shards, one CPU each: two run at a time on the node's two CPUs.
+  const fs::path out = dir_ / "sharded";
+  const test::CommandResult submitted =
+      test::runCommand("RANGE_NLM_CPUS=1 RANGE_NLM_DENOISE=" + kTool + " bash " + (kScripts / "submit.sh").string() +
+                       " " + in.string() + " " + out.string() + " 4 " + options);
+  ASSERT_EQ(submitted.status, 0) << submitted.output << cluster->logs();
+  std::smatch ids;
+  ASSERT_TRUE(std::regex_search(submitted.output, ids, std::regex("array job ([0-9]+) .*check job ([0-9]+)")))
+      << submitted.output;
+  const std::string array_job = ids[1], check_job = ids[2];
+  const fs::path logs = dir_ / "sharded.logs";
+  ASSERT_TRUE(waitForJobs(90, logs)) << "jobs left after 90 s or a failed task:\n"
+                                     << test::runCommand("squeue").output << failedTask(logs) << cluster->logs();
+
+  const std::string check = test::readBytes((logs / ("range_nlm-check-" + check_job + ".out")).string());
+  EXPECT_NE(check.find("30 input frames in " + in.string() + ", 30 outputs in " + out.string() + ", 0 missing"),
+            std::string::npos)
+      << check << cluster->logs();
+  EXPECT_NE(check.find("shards: 4 task logs, 0 failed; 30 frames written, 0 skipped"), std::string::npos) << check;
+  EXPECT_NE(check.find("frames/s"), std::string::npos) << check;
+  for (int k = 0; k < 4; ++k) {
+    const std::string task = test::readBytes((logs / ("range_nlm-" + array_job + "_" + std::to_string(k) + ".out")).string());
+    EXPECT_NE(task.find("shard " + std::to_string(k) + "/4, 1 thread(s)"), std::string::npos) << task;
+    EXPECT_NE(task.find("exit_status=0"), std::string::npos) << task;
+  }
+  ASSERT_EQ(frameFiles(out), frameFiles(single));
+  for (const std::string& name : frameFiles(single))
+    EXPECT_TRUE(test::readBytes((out / name).string()) == test::readBytes((single / name).string()))
+        << name << " differs from the single-machine run";
+
+  // Shard 2 failed: re-run it alone as its own one-task array, with --resume.
+  for (int k : {16, 18, 20}) // shard 2 of 4 writes 16 .. 22
+    fs::remove(out / frameName(k));
+  const test::CommandResult rerun = test::runCommand(
+      "sbatch --parsable --array=2 --cpus-per-task=1 --output=" + (logs / "rerun-%A_%a.out").string() +
+      " --export=ALL,RANGE_NLM_SHARDS=4,RANGE_NLM_DENOISE=" + kTool + " " +
+      (kScripts / "range_nlm_array.sbatch").string() + " " + in.string() + " " + out.string() + " --resume " + options);
+  ASSERT_EQ(rerun.status, 0) << rerun.output;
+  ASSERT_TRUE(waitForJobs(60)) << test::runCommand("squeue").output << cluster->logs();
+  const std::string rerun_id = rerun.output.substr(0, rerun.output.find_first_of(";\n"));
+  const std::string rerun_log = test::readBytes((logs / ("rerun-" + rerun_id + "_2.out")).string());
+  EXPECT_NE(rerun_log.find("shard 2/4"), std::string::npos) << rerun_log;
+  EXPECT_NE(rerun_log.find("\"frames\":3,"), std::string::npos) << rerun_log;
+  EXPECT_NE(rerun_log.find("\"skipped\":4,"), std::string::npos) << rerun_log;
+  for (const std::string& name : frameFiles(single))
+    EXPECT_TRUE(test::readBytes((out / name).string()) == test::readBytes((single / name).string()))
+        << name << " differs from the single-machine run after the re-run";
+  // The check script also runs by hand, outside Slurm.
+  const test::CommandResult by_hand =
+      test::runCommand("bash " + (kScripts / "range_nlm_check.sbatch").string() + " " + in.string() + " " +
+                       out.string() + " " + logs.string() + " " + array_job);
+  EXPECT_EQ(by_hand.status, 0) << by_hand.output;
+  fs::remove(out / frameName(29));
+  const test::CommandResult missing =
+      test::runCommand("bash " + (kScripts / "range_nlm_check.sbatch").string() + " " + in.string() + " " +
+                       out.string() + " " + logs.string() + " " + array_job);
+  EXPECT_EQ(missing.status, 1) << missing.output;
+  EXPECT_NE(missing.output.find("1 missing\n  missing: " + frameName(29)), std::string::npos) << missing.output;
+}
