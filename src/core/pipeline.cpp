@@ -308,12 +308,22 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
-  const int k = parameters.dilation > 0 ? parameters.dilation : automaticDilation(*frames[center]);
-  if (k <= 1) {
+  const Grid& input = *frames[center];
+  const bool empty = input.countValid() == 0;
+  int k = parameters.dilation;
+  if (k == 0) {
+    // Automatic: contiguous windows unless every phase still holds the windows, and nothing to
+    // estimate in a frame without a valid point (runContiguous says so).
+    const int needed = std::max({parameters.search_window, parameters.patch_size, parameters.normal_window,
+                                 parameters.normal_presmooth_window});
+    k = empty ? 1 : automaticDilation(input);
+    if (input.width / k < needed || input.height / k < needed)
+      k = 1;
+  }
+  if (k <= 1 || empty) {
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
-  const Grid& input = *frames[center];
   // The dilated passes: each phase (u mod k, v mod k) of the frames is a grid of its own whose
   // neighbours are k pixels apart, filtered with contiguous windows.
   FilterParameters coarse = parameters;

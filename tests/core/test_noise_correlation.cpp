@@ -162,3 +162,29 @@ TEST(FramesMoved, NoiseIsNotMotionAShiftIs)
   Grid tiny(16, 12);
   EXPECT_FALSE(framesMoved(tiny, estimateNormals(tiny, 3, kOrigin, 0), tiny));
 }
+
+TEST(Dilation, AutomaticFallsBackToContiguousWindowsWhereAPhaseIsNarrowerThanTheWindows)
+{
+  // A plane at 1 m with a smooth ripple of period 6 px: its second differences at lag 2 are 3
+  // times those at lag 1, so automaticDilation flags it as correlated.
+  const int w = 16, h = 40;
+  Grid g(w, h);
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      const float z = 1.0f + 0.004f * std::sin(6.2832f * u / 6.0f + 0.3f) * std::sin(6.2832f * v / 6.0f + 1.1f);
+      g.x[i] = (u - w / 2) * z / 500.0f, g.y[i] = (v - h / 2) * z / 500.0f, g.z[i] = z;
+      g.valid[i] = 1;
+    }
+  ASSERT_EQ(automaticDilation(g), 2);
+  FilterParameters automatic = FilterParameters::recommended(), contiguous = automatic;
+  contiguous.dilation = 1;
+  // Phases of 8 columns cannot hold the 9 x 9 window: the default runs contiguous windows.
+  const FilterRun a = runFilter({&g}, 0, automatic, kOrigin, {});
+  const FilterRun b = runFilter({&g}, 0, contiguous, kOrigin, {});
+  EXPECT_EQ(a.output.z, b.output.z);
+  // Asked for explicitly, the dilation is refused with the window that does not fit.
+  FilterParameters forced = automatic;
+  forced.dilation = 2;
+  EXPECT_THROW(runFilter({&g}, 0, forced, kOrigin, {}), std::invalid_argument);
+}
