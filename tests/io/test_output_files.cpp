@@ -42,6 +42,14 @@ smallCloud()
   return test::makeCloud(32, 24, test::plane({0.1, 0.0, 1.0}, 1.0), 0.002, 3);
 }
 
+/// A small organized PCD frame (64 x 48) at `path`: the special-file tests need an output, not a
+/// large one (they run under the sanitizers too).
+void
+writeSmallInput(const std::string& path)
+{
+  io::saveCloudAtomic(path, test::makeCloud(64, 48, test::plane({0.1, 0.0, 1.0}, 1.0), 0.002, 4));
+}
+
 /// Names in `dir` that look like our temporary files (".NAME.tmpPID").
 std::vector<std::string>
 temporaries(const fs::path& dir)
@@ -186,15 +194,16 @@ TEST_F(OutputFiles, SymbolicLinkIsFollowedAndStaysALink)
 // gets exactly the bytes of the same output written to a regular file.
 TEST_F(OutputFiles, FifoIsWrittenDirectly)
 {
-  const test::CommandResult regular = test::runDenoise(kMilk + " " + path("regular.pcd") + " -q");
+  writeSmallInput(path("in.pcd"));
+  const test::CommandResult regular = test::runDenoise(path("in.pcd") + " " + path("regular.pcd") + " -q");
   ASSERT_EQ(regular.status, 0) << regular.output;
   const std::string expected = test::readBytes(path("regular.pcd"));
-  EXPECT_GT(expected.size(), 4000000u);
+  EXPECT_GT(expected.size(), 64u * 48 * 12);
 
   const std::string fifo = path("out.fifo");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << std::strerror(errno);
   // Opened read-write, so that the tool's open never waits and the reader never sees an early
-  // end; it reads until it has the expected bytes or nothing comes for 20 s (a tool that
+  // end; it reads until it has the expected bytes or nothing comes for 120 s (a tool that
   // replaced the FIFO writes nothing into it).
   const int fd = ::open(fifo.c_str(), O_RDWR | O_CLOEXEC);
   ASSERT_GE(fd, 0) << std::strerror(errno);
@@ -203,7 +212,7 @@ TEST_F(OutputFiles, FifoIsWrittenDirectly)
     std::vector<char> buffer(1 << 16);
     while (received.size() < expected.size()) {
       pollfd p{fd, POLLIN, 0};
-      if (::poll(&p, 1, 20000) <= 0)
+      if (::poll(&p, 1, 120000) <= 0)
         break;
       const ssize_t n = ::read(fd, buffer.data(), buffer.size());
       if (n <= 0)
@@ -211,7 +220,7 @@ TEST_F(OutputFiles, FifoIsWrittenDirectly)
       received.append(buffer.data(), std::size_t(n));
     }
   });
-  const test::CommandResult r = test::runDenoise(kMilk + " " + fifo + " -q");
+  const test::CommandResult r = test::runDenoise(path("in.pcd") + " " + fifo + " -q");
   reader.join();
   ::close(fd);
   EXPECT_EQ(r.status, 0) << r.output;
@@ -229,13 +238,12 @@ TEST_F(OutputFiles, CharacterDeviceIsWrittenDirectly)
   const std::string null = path("null");
   if (::mknod(null.c_str(), S_IFCHR | 0666, makedev(1, 3)) != 0)
     GTEST_SKIP() << "cannot create a device node here: " << std::strerror(errno);
-  const test::CommandResult r = test::runDenoise(kMilk + " " + null + " -q");
+  writeSmallInput(path("in.pcd"));
+  const test::CommandResult r = test::runDenoise(path("in.pcd") + " " + null + " -q");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::is_character_file(null));
   EXPECT_TRUE(temporaries(dir_).empty());
-  const test::CommandResult devnull = test::runDenoise(kMilk + " /dev/null -q");
-  EXPECT_EQ(devnull.status, 0) << devnull.output;
-  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  // (Never the system's /dev/null itself: a tool with this defect, run as root, would replace it.)
 }
 
 // Block devices, sockets and directories are refused with a message saying what they are; the
@@ -257,7 +265,8 @@ TEST_F(OutputFiles, OtherSpecialFilesAreRefused)
   ASSERT_LT(socket_path.size(), sizeof address.sun_path);
   std::strcpy(address.sun_path, socket_path.c_str());
   ASSERT_EQ(::bind(sock, reinterpret_cast<sockaddr*>(&address), sizeof address), 0) << std::strerror(errno);
-  const test::CommandResult r = test::runDenoise(kMilk + " " + socket_path + " -q");
+  writeSmallInput(path("in.pcd"));
+  const test::CommandResult r = test::runDenoise(path("in.pcd") + " " + socket_path + " -q");
   ::close(sock);
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("is a socket"), std::string::npos) << r.output;

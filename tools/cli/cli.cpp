@@ -17,6 +17,7 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <signal.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -32,6 +33,9 @@ runTool(const std::string& tool, const std::function<int()>& body)
 {
   // PCL's own console messages would add lines to our one-line errors.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  // A FIFO output whose reader went away then fails a write with EPIPE, reported with the file's
+  // name, instead of killing the tool silently.
+  ::signal(SIGPIPE, SIG_IGN);
   try {
     return body();
   } catch (const UsageError& e) {
