@@ -408,19 +408,27 @@ TEST(TemporalFilter, CloudsWhoseGridDisagreesWithTheirPointsAreRejectedEverywher
     f.setInputCloud(bad);
     expectInvalid([&] { f.filter(out); });
 
+    // setFrames itself refuses the window (the current frame, a neighbour, a window of one)...
     TemporalNonLocalMeansFilter<pcl::PointXYZ> t;
-    expectInvalid([&] {
-      t.setFrames({fine, bad, fine}, 1); // the current frame
+    expectInvalid([&] { t.setFrames({fine, bad, fine}, 1); });
+    expectInvalid([&] { t.setFrames({fine, bad, fine}, 0); });
+    expectInvalid([&] { t.setFrames({bad}, 0); });
+    // ... and a frame changed after setFrames is refused by filter().
+    Cloud::Ptr later_bad(new Cloud(good));
+    t.setFrames({fine, later_bad, fine}, 0);
+    later_bad->width = shape.first;
+    later_bad->height = shape.second;
+    expectInvalid([&] { t.filter(out); });
+    later_bad->width = 64;
+    later_bad->height = 48;
+    t.setFrames({fine, later_bad}, 1);
+    later_bad->points.resize(3072 - 64); // the current frame, a row short
+    try {
       t.filter(out);
-    });
-    expectInvalid([&] {
-      t.setFrames({fine, bad, fine}, 0); // a neighbour
-      t.filter(out);
-    });
-    expectInvalid([&] {
-      t.setFrames({bad}, 0); // a window of one
-      t.filter(out);
-    });
+      ADD_FAILURE() << "no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("3008 points"), std::string::npos) << e.what();
+    }
     TemporalNonLocalMeansFilter<pcl::PointXYZ> plain; // without setFrames: the input alone
     plain.setInputCloud(bad);
     expectInvalid([&] { plain.filter(out); });

@@ -100,6 +100,16 @@ TEST_F(Limits, DecompressionBombPngIsRefusedFromItsHeader)
   EXPECT_LT(seconds, 5.0);
   EXPECT_FALSE(fs::exists(path("out.png")));
 
+  // With the check off and too little memory (address space limited to 700 MB, the 800 MB of
+  // pixels do not fit), running out of memory still names the frame.
+  if (!test::kAddressSanitizer) { // AddressSanitizer reserves terabytes of address space
+    r = test::runCommand("ulimit -v 700000 && exec " + std::string(RANGE_NLM_TOOLS_DIR) + "/range_nlm_denoise " +
+                         bomb + " " + path("out.png") + " -q --memory-limit 0");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("'" + bomb + "': out of memory while reading the frame"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(path("out.png")));
+  }
+
   // No limit: the same header passes the check (and decoding it is left untried here); a limit
   // refuses a VGA frame too, with the estimate in MB.
   const std::string milk = std::string(RANGE_NLM_SOURCE_DIR) + "/data/milk_cartoon_all_small_clorox.pcd";

@@ -78,8 +78,10 @@ DepthImage
 readDepthPng(const std::string& path, const io::MemoryBudget& budget = io::MemoryBudget());
 
 /// Writes a 16-bit greyscale PNG, first to a temporary file in the same directory, then renamed
-/// into place. Throws std::invalid_argument naming the file if the image is inconsistent or the
-/// file cannot be written.
+/// into place (a symbolic link is followed and kept; a character device or FIFO is written
+/// directly; see io::saveCloudAtomic). Throws std::invalid_argument naming the file if the image
+/// is inconsistent or the file cannot be written (e.g. "No space left on device"); no partial
+/// file is left.
 void
 writeDepthPng(const std::string& path, const DepthImage& image);
 
