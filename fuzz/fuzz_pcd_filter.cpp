@@ -69,6 +69,20 @@ temporaryPath()
   return path;
 }
 
+/// The reader's memory check as the tool uses it, with a limit well inside the fuzzer's RSS limit
+/// (a header may announce 2^28 points in front of a tiny body).
+const range_nlm::io::MemoryBudget&
+budget()
+{
+  static const range_nlm::io::MemoryBudget b = [] {
+    range_nlm::io::MemoryBudget m;
+    m.limit_bytes = std::uint64_t(512) << 20;
+    m.setting = "--memory-limit";
+    return m;
+  }();
+  return b;
+}
+
 void
 readAsFile(const std::uint8_t* data, std::size_t size)
 {
@@ -79,7 +93,7 @@ readAsFile(const std::uint8_t* data, std::size_t size)
   }
   const bool organized = size % 2 == 0;
   try {
-    const range_nlm::io::LoadedCloud loaded = range_nlm::io::loadCloud(path, organized);
+    const range_nlm::io::LoadedCloud loaded = range_nlm::io::loadCloud(path, organized, budget());
     const pcl::PCLPointCloud2& blob = loaded.blob;
     if (blob.width == 0 || blob.height == 0 || (organized && blob.height < 2) ||
         blob.data.size() != std::size_t(blob.width) * blob.height * blob.point_step)
@@ -226,7 +240,7 @@ readAsDepthImage(const std::uint8_t* data, std::size_t size)
   try {
     range_nlm::DepthIntrinsics intrinsics;
     intrinsics.depth_scale = 1000.0;
-    const range_nlm::io::LoadedCloud loaded = range_nlm::io::loadFrame(path, intrinsics);
+    const range_nlm::io::LoadedCloud loaded = range_nlm::io::loadFrame(path, intrinsics, budget());
     const pcl::PointCloud<pcl::PointXYZ> cloud = range_nlm::io::xyzFromBlob(loaded, path);
     if (cloud.height < 2 || cloud.size() != std::size_t(cloud.width) * cloud.height)
       bug("loadFrame accepted a depth image that is not an organized frame");

@@ -155,9 +155,11 @@ secondaryLine(const char* what, double value, std::size_t pixels, const char* pi
 
 /// One real frame (PCD or depth PNG) as x, y, z.
 pcl::PointCloud<pcl::PointXYZ>
-loadRealFrame(const std::string& path, const DepthIntrinsics& intrinsics)
+loadRealFrame(const std::string& path, const DepthIntrinsics& intrinsics, DefaultIntrinsicsWarning& warning)
 {
-  return xyzFromBlob(loadFrame(path, intrinsics), path);
+  const LoadedCloud loaded = loadFrame(path, intrinsics);
+  warning.frameRead(path);
+  return xyzFromBlob(loaded, path);
 }
 
 std::string
@@ -186,8 +188,9 @@ runPlanar(const po::variables_map& vm, const std::vector<std::string>& results, 
     throw UsageError(e.what());
   }
   const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
+  DefaultIntrinsicsWarning warning("range_nlm_eval", vm);
   const std::string raw_path = vm["raw"].as<std::string>();
-  const pcl::PointCloud<pcl::PointXYZ> raw = loadRealFrame(raw_path, intrinsics);
+  const pcl::PointCloud<pcl::PointXYZ> raw = loadRealFrame(raw_path, intrinsics, warning);
   PlanarRegions regions;
   try {
     regions = findPlanarRegions(raw, options);
@@ -197,7 +200,7 @@ runPlanar(const po::variables_map& vm, const std::vector<std::string>& results, 
   std::vector<std::string> names{raw_path};
   std::vector<PlanarResidual> residuals{planarResidual(regions, raw)};
   for (const std::string& path : results) {
-    const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics);
+    const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics, warning);
     try {
       residuals.push_back(planarResidual(regions, frame));
     } catch (const std::invalid_argument& e) {
@@ -239,11 +242,12 @@ runJitter(const po::variables_map& vm, const std::vector<std::string>& sequences
   if (sequences.empty())
     throw UsageError("--jitter expects at least one directory of frames");
   const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
+  DefaultIntrinsicsWarning warning("range_nlm_eval", vm);
   std::vector<TemporalJitter> jitters;
   for (const std::string& directory : sequences) {
     JitterEvaluator evaluator;
     for (const std::string& path : listInputFrames(directory)) {
-      const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics);
+      const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics, warning);
       try {
         evaluator.add(frame);
       } catch (const std::invalid_argument& e) {

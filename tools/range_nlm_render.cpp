@@ -35,11 +35,12 @@ struct Frame
 };
 
 Frame
-loadInput(const std::string& path, const DepthIntrinsics& intrinsics)
+loadInput(const std::string& path, const DepthIntrinsics& intrinsics, DefaultIntrinsicsWarning& warning)
 {
   Frame frame;
   frame.path = path;
   const LoadedCloud loaded = loadFrame(path, intrinsics);
+  warning.frameRead(path);
   frame.cloud = xyzFromBlob(loaded, path);
   frame.viewpoint = {loaded.origin[0], loaded.origin[1], loaded.origin[2]};
   return frame;
@@ -140,6 +141,7 @@ run(int argc, char** argv)
   const RenderMode mode = modeFrom(vm);
   RenderParameters parameters = renderParametersFrom(vm);
   const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
+  DefaultIntrinsicsWarning warning("range_nlm_render", vm);
   const std::string scale_from = vm["scale-from"].as<std::string>();
   if (scale_from != "before" && scale_from != "both")
     throw UsageError("--scale-from must be 'before' or 'both', got '" + scale_from + "'");
@@ -156,8 +158,8 @@ run(int argc, char** argv)
     const std::string& output = paths[0];
     if (extensionOf(output) != ".png")
       throw UsageError("output '" + output + "' of a comparison must be a .png file");
-    const Frame before = loadInput(vm["before"].as<std::string>(), intrinsics);
-    const Frame after = loadInput(vm["after"].as<std::string>(), intrinsics);
+    const Frame before = loadInput(vm["before"].as<std::string>(), intrinsics, warning);
+    const Frame after = loadInput(vm["after"].as<std::string>(), intrinsics, warning);
     if (before.cloud.width != after.cloud.width || before.cloud.height != after.cloud.height)
       throw InputError("'" + after.path + "' is " + std::to_string(after.cloud.width) + " x " +
                        std::to_string(after.cloud.height) + " but '" + before.path + "' is " +
@@ -189,7 +191,7 @@ run(int argc, char** argv)
     throw UsageError("output '" + output + "' must be a .png image or a .pcd cloud");
   if (extension == ".pcd" && mode != RenderMode::curvature)
     throw UsageError("a .pcd output is coloured by curvature; add --mode curvature");
-  const Frame frame = loadInput(paths[0], intrinsics);
+  const Frame frame = loadInput(paths[0], intrinsics, warning);
   parameters.viewpoint = frame.viewpoint;
   float limit = 0.0f;
   std::string size;

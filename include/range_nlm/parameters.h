@@ -97,7 +97,11 @@ struct FilterParameters
   /// Number of filter passes; normals and automatic bandwidths are re-estimated before each.
   /// >= 1, default 2 (paper: 1).
   int iterations = 2;
-  /// OpenMP threads; 0 = as many as OpenMP offers. Output does not depend on it. >= 0, default 0.
+  /// Largest accepted `threads`: OpenMP tries to start every thread asked for, and tens of
+  /// thousands of them exhaust the stacks and crash.
+  static constexpr int max_threads = 1024;
+  /// OpenMP threads; 0 = as many as OpenMP offers. Output does not depend on it.
+  /// 0 ... max_threads (1024), default 0.
   int threads = 0;
   /// d: distance bandwidth of Phi_d = exp(-|p_i - p_j|^2 / d^2), cloud units (e.g. metres).
   /// 0 = automatic (d = distance_scale * mu_d, see estimateBandwidths in core/pipeline.h). >= 0, default automatic.

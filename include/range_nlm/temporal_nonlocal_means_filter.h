@@ -31,8 +31,8 @@ public:
   TemporalNonLocalMeansFilter() { this->filter_name_ = "TemporalNonLocalMeansFilter"; }
 
   /// The frames in time order and the index of the current one, which also becomes the input
-  /// cloud. Throws std::invalid_argument if `current` is not an index of `frames` or a frame is
-  /// null.
+  /// cloud. Throws std::invalid_argument if `current` is not an index of `frames`, a frame is
+  /// null, or a frame's width x height is not its number of points.
   void setFrames(const std::deque<PointCloudConstPtr>& frames, std::size_t current);
   const std::deque<PointCloudConstPtr>& getFrames() const { return frames_; }
   /// Lets go of the frames and the input cloud (the filter's buffers stay for the next call).

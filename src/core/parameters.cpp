@@ -34,8 +34,8 @@ FilterParameters::validate() const
     fail("dilation", dilation, "must be >= 0 (0 = automatic)");
   if (iterations < 1)
     fail("iterations", iterations, "must be at least 1");
-  if (threads < 0)
-    fail("threads", threads, "must be >= 0 (0 = all available)");
+  if (threads < 0 || threads > max_threads)
+    fail("threads", threads, "must be 0 (all available) ... 1024");
   if (!(std::isfinite(distance_bandwidth) && distance_bandwidth >= 0.0f))
     fail("distance_bandwidth", distance_bandwidth, "must be finite and >= 0 (0 = automatic)");
   if (!(std::isfinite(similarity_bandwidth) && similarity_bandwidth >= 0.0f))

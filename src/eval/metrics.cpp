@@ -1,5 +1,6 @@
 // Accuracy metrics of filtered range frames against ground truth (see evaluation.h).
 #include <range_nlm/eval/metrics.h>
+#include <range_nlm/parameters.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -279,8 +280,8 @@ EvaluationOptions::validate() const
     fail("viewpoint", "(non-finite)", "must be finite");
   if (!(std::isfinite(change_tolerance) && change_tolerance >= 0.0))
     fail("change_tolerance", change_tolerance, "must be finite and >= 0 metres");
-  if (threads < 0)
-    fail("threads", threads, "must be >= 0 (0 = all available)");
+  if (threads < 0 || threads > FilterParameters::max_threads)
+    fail("threads", threads, "must be 0 (all available) ... 1024");
 }
 
 std::vector<unsigned char>

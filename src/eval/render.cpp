@@ -1,6 +1,7 @@
 // Flat shading, mean-curvature colouring and before/after images of organized range frames.
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/eval/render.h>
+#include <range_nlm/parameters.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -112,8 +113,8 @@ RenderParameters::validate() const
     throw std::invalid_argument("percentile must be in (0, 100], got " + numberText(percentile));
   if (gap < 0 || gap > 1000)
     throw std::invalid_argument("gap must be in 0 ... 1000 pixels, got " + std::to_string(gap));
-  if (threads < 0)
-    throw std::invalid_argument("threads must be >= 0 (0 = all), got " + std::to_string(threads));
+  if (threads < 0 || threads > FilterParameters::max_threads)
+    throw std::invalid_argument("threads must be 0 (all) ... 1024, got " + std::to_string(threads));
 }
 
 Grid

@@ -1,5 +1,8 @@
 // 16-bit depth PNGs <-> organized clouds, the intrinsics.txt reader and the libpng wrappers.
 #include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/pcd_file.h>
+
+#include "output_file.h"
 
 #include <png.h>
 
@@ -46,10 +49,15 @@ struct PngContext
 {
   char message[256] = {0};
   std::FILE* file = nullptr;
+  io::detail::OutputFile* output = nullptr; // writing
   png_structp png = nullptr;
   png_infop info = nullptr;
   detail::PngPixels pixels;
   std::vector<png_bytep> rows;
+  // Reading: the memory bound checked from the header, and why it refused the image.
+  const io::MemoryBudget* budget = nullptr;
+  std::uint64_t point_step = 0;
+  std::string refusal;
 };
 
 void
@@ -58,6 +66,20 @@ onPngError(png_structp png, png_const_charp message)
   auto* context = static_cast<PngContext*>(png_get_error_ptr(png));
   std::snprintf(context->message, sizeof context->message, "%s", message);
   png_longjmp(png, 1);
+}
+
+void
+onPngWrite(png_structp png, png_bytep data, png_size_t size)
+{
+  auto* context = static_cast<PngContext*>(png_get_io_ptr(png));
+  const int error = context->output->tryWrite(data, size);
+  if (error != 0)
+    png_error(png, std::strerror(error));
+}
+
+void
+onPngFlush(png_structp)
+{
 }
 
 void
@@ -84,6 +106,12 @@ readPngPixels(PngContext& context)
     return false;
   png_init_io(png, context.file);
   png_read_info(png, context.info);
+  if (context.budget != nullptr) {
+    context.refusal = context.budget->refusal(png_get_image_width(png, context.info),
+                                              png_get_image_height(png, context.info), context.point_step);
+    if (!context.refusal.empty())
+      return false;
+  }
   const int color_type = png_get_color_type(png, context.info);
   const int bit_depth = png_get_bit_depth(png, context.info);
   if (color_type == PNG_COLOR_TYPE_PALETTE)
@@ -128,7 +156,7 @@ writePngPixels(PngContext& context, const detail::PngPixels& pixels)
   }
   if (setjmp(png_jmpbuf(png)))
     return false;
-  png_init_io(png, context.file);
+  png_set_write_fn(png, &context, onPngWrite, onPngFlush);
   png_set_IHDR(png, context.info, static_cast<png_uint_32>(pixels.width), static_cast<png_uint_32>(pixels.height),
                pixels.bit_depth, pixels.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
@@ -222,8 +250,14 @@ readIntrinsics(const std::string& path, const DepthIntrinsics& defaults)
     }
     const bool numeric = key == "fx" || key == "fy" || key == "cx" || key == "cy" || key == "depth_scale" ||
                          key == "width" || key == "height";
-    if (!numeric)
+    const bool free_text = key == "sensor" || key == "distortion" || key == "note" || key == "notes" ||
+                           key == "comment" || key == "comments" || key == "source";
+    if (free_text)
       continue;
+    if (!numeric)
+      throw std::invalid_argument(where + ": unknown key '" + key +
+                                  "' (known: fx, fy, cx, cy, depth_scale, width, height, depth_format; free text: "
+                                  "sensor, distortion, note, notes, comment, comments, source)");
     const char* begin = value.c_str();
     char* end = nullptr;
     errno = 0;
@@ -241,9 +275,12 @@ readIntrinsics(const std::string& path, const DepthIntrinsics& defaults)
     else if (key == "depth_scale") {
       result.depth_scale = number;
       have_scale = true;
-    } else if (!(number >= 1.0 && number == std::floor(number)))
+    } else if (!(number >= 1.0 && number <= 1e9 && number == std::floor(number)))
       throw std::invalid_argument(where + ": '" + key + "' must be a positive integer, got '" + value + "'");
+    else
+      (key == "width" ? result.width : result.height) = static_cast<int>(number);
   }
+  result.source = path;
   if (in.bad())
     throw std::invalid_argument(quoted(path) + ": read error");
   if (!have_scale && format_scale > 0.0)
@@ -260,9 +297,11 @@ namespace detail
 {
 
 PngPixels
-readPng(const std::string& path)
+readPng(const std::string& path, const io::MemoryBudget& budget, std::uint64_t point_step)
 {
   PngContext context;
+  context.budget = &budget;
+  context.point_step = point_step;
   context.file = std::fopen(path.c_str(), "rb");
   if (context.file == nullptr)
     throw std::invalid_argument(quoted(path) + ": cannot open PNG file: " + std::strerror(errno));
@@ -281,6 +320,8 @@ readPng(const std::string& path)
     throw;
   }
   destroyReader(context);
+  if (!context.refusal.empty())
+    throw std::invalid_argument(quoted(path) + ": " + context.refusal);
   if (!ok)
     throw std::invalid_argument(quoted(path) + ": damaged PNG file: " + context.message);
   return std::move(context.pixels);
@@ -301,46 +342,39 @@ writePng(const std::string& path, const PngPixels& pixels)
     throw std::invalid_argument(quoted(path) + ": pixel buffer holds " + std::to_string(pixels.bytes.size()) +
                                 " bytes, the image needs " + std::to_string(row_bytes * pixels.height));
 
-  const std::filesystem::path target(path);
-  const std::filesystem::path temporary =
-      target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
   PngContext context;
   context.rows.resize(static_cast<std::size_t>(pixels.height));
   for (int v = 0; v < pixels.height; ++v)
     context.rows[v] = const_cast<png_bytep>(pixels.bytes.data() + row_bytes * static_cast<std::size_t>(v));
-  context.file = std::fopen(temporary.string().c_str(), "wb");
-  if (context.file == nullptr)
-    throw std::invalid_argument(quoted(path) + ": cannot create PNG file: " + std::strerror(errno));
-  bool ok = false;
   try {
-    ok = writePngPixels(context, pixels);
-  } catch (...) {
-    ok = false;
-    std::snprintf(context.message, sizeof context.message, "out of memory");
-  }
-  if (context.png != nullptr)
-    png_destroy_write_struct(&context.png, context.info != nullptr ? &context.info : nullptr);
-  const bool flushed = std::fflush(context.file) == 0;
-  const bool closed = std::fclose(context.file) == 0;
-  std::error_code ec;
-  if (!ok || !flushed || !closed) {
-    std::filesystem::remove(temporary, ec);
-    throw std::invalid_argument(quoted(path) + ": cannot write PNG file: " +
-                                (ok ? std::string(std::strerror(errno)) : std::string(context.message)));
-  }
-  std::filesystem::rename(temporary, target, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    throw std::invalid_argument(quoted(path) + ": cannot move PNG file into place: " + ec.message());
+    // Temporary file + rename for a regular file, directly to a device or FIFO (see OutputFile).
+    io::detail::OutputFile output(path);
+    context.output = &output;
+    bool ok = false;
+    try {
+      ok = writePngPixels(context, pixels);
+    } catch (const std::bad_alloc&) {
+      std::snprintf(context.message, sizeof context.message, "out of memory");
+    }
+    if (context.png != nullptr)
+      png_destroy_write_struct(&context.png, context.info != nullptr ? &context.info : nullptr);
+    if (!ok)
+      throw std::invalid_argument(quoted(path) + ": cannot write PNG file: " + context.message +
+                                  (std::strcmp(context.message, std::strerror(ENOSPC)) == 0
+                                       ? " (the disk is full; nothing was written under this name)"
+                                       : ""));
+    output.commit();
+  } catch (const io::InputError& e) {
+    throw std::invalid_argument(e.what());
   }
 }
 
 } // namespace detail
 
 DepthImage
-readDepthPng(const std::string& path)
+readDepthPng(const std::string& path, const io::MemoryBudget& budget)
 {
-  detail::PngPixels pixels = detail::readPng(path);
+  detail::PngPixels pixels = detail::readPng(path, budget, sizeof(pcl::PointXYZ));
   if (pixels.channels != 1 || pixels.bit_depth != 16)
     throw std::invalid_argument(quoted(path) + ": not a 16-bit greyscale depth PNG (found " +
                                 std::to_string(pixels.bit_depth) + "-bit " + colorTypeName(pixels.channels) + ")");
@@ -382,6 +416,14 @@ depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics)
     throw std::invalid_argument("depth image: " + std::to_string(image.width) + " x " +
                                 std::to_string(image.height) + " with " + std::to_string(image.values.size()) +
                                 " values is empty or inconsistent");
+  if ((intrinsics.width > 0 && intrinsics.width != image.width) ||
+      (intrinsics.height > 0 && intrinsics.height != image.height))
+    throw std::invalid_argument("image is " + std::to_string(image.width) + " x " + std::to_string(image.height) +
+                                " pixels but the intrinsics" +
+                                (intrinsics.source.empty() ? std::string() : " in " + quoted(intrinsics.source)) +
+                                " are for " + std::to_string(intrinsics.width) + " x " +
+                                std::to_string(intrinsics.height) +
+                                " (give the intrinsics of this camera and resolution)");
   pcl::PointCloud<pcl::PointXYZ> cloud(static_cast<std::uint32_t>(image.width),
                                        static_cast<std::uint32_t>(image.height));
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -406,7 +448,7 @@ depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics)
 }
 
 DepthImage
-cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale)
+cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale, DepthClamping* clamping)
 {
   if (!(std::isfinite(depth_scale) && depth_scale > 0.0))
     throw std::invalid_argument("depth_scale must be a positive number, got " + numberText(depth_scale));
@@ -423,6 +465,16 @@ cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scal
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
       continue;
     const double value = std::round(static_cast<double>(p.z) * depth_scale);
+    if (clamping != nullptr && value > 65535.0) {
+      image.values[i] = 65535;
+      ++clamping->above;
+      continue;
+    }
+    if (clamping != nullptr && value < 1.0) {
+      image.values[i] = 1;
+      ++clamping->below;
+      continue;
+    }
     if (!(value >= 1.0 && value <= 65535.0))
       throw std::invalid_argument(
           "depth " + numberText(p.z) + " m at pixel (" + std::to_string(i % cloud.width) + ", " +
@@ -435,9 +487,9 @@ cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scal
 }
 
 pcl::PointCloud<pcl::PointXYZ>
-loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics)
+loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics, const io::MemoryBudget& budget)
 {
-  const DepthImage image = readDepthPng(path);
+  const DepthImage image = readDepthPng(path, budget);
   try {
     return depthImageToCloud(image, intrinsics);
   } catch (const std::invalid_argument& e) {
@@ -446,11 +498,12 @@ loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics)
 }
 
 void
-saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale)
+saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale,
+             DepthClamping* clamping)
 {
   DepthImage image;
   try {
-    image = cloudToDepthImage(cloud, depth_scale);
+    image = cloudToDepthImage(cloud, depth_scale, clamping);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(quoted(path) + ": " + e.what());
   }

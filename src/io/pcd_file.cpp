@@ -1,5 +1,7 @@
 #include <range_nlm/io/pcd_file.h>
 
+#include "output_file.h"
+
 #include <pcl/common/io.h>
 #include <pcl/io/pcd_io.h>
 
@@ -441,7 +443,7 @@ checkAsciiBody(const std::string& path, const PcdLayout& layout)
 } // namespace
 
 LoadedCloud
-loadCloud(const std::string& path, bool organized)
+loadCloud(const std::string& path, bool organized, const MemoryBudget& budget)
 {
   std::error_code ec;
   if (!fs::exists(path, ec))
@@ -454,6 +456,10 @@ loadCloud(const std::string& path, bool organized)
   if (file_size == 0)
     fail(path, "file is empty");
   const PcdLayout layout = readPcdLayout(path, file_size);
+  // Before the body is read (a binary_compressed body expands up to 88-fold).
+  const std::string refusal = budget.refusal(layout.width, layout.height, layout.point_step);
+  if (!refusal.empty())
+    fail(path, refusal);
   for (const char* axis : {"x", "y", "z"}) {
     const auto f = std::find_if(layout.fields.begin(), layout.fields.end(),
                                 [&](const pcl::PCLPointField& field) { return field.name == axis; });
@@ -562,26 +568,31 @@ void
 saveCloudAtomic(const std::string& path, const pcl::PCLPointCloud2& blob, const Eigen::Vector4f& origin,
                 const Eigen::Quaternionf& orientation)
 {
-  const fs::path target(path);
-  const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                               std::to_string(::getpid()));
+  // PCL's PCDWriter::writeBinary fills a memory map of the file: on a full disk the kernel
+  // answers with SIGBUS. The same bytes (PCL's header, then the points) go out with write(2)
+  // here, every return checked.
+  if (blob.data.empty() || blob.data.size() < std::size_t(blob.point_step) * blob.width * blob.height)
+    throw InputError("'" + path + "': cannot write output file: the cloud holds " + std::to_string(blob.data.size()) +
+                     " bytes, not " + std::to_string(blob.width) + " x " + std::to_string(blob.height) + " points of " +
+                     std::to_string(blob.point_step) + " bytes");
   pcl::PCDWriter writer;
-  int rc = -1;
-  try {
-    rc = writer.writeBinary(tmp.string(), blob, origin, orientation);
-  } catch (const std::exception&) {
-    rc = -1;
+  std::string header = writer.generateHeaderBinary(blob, origin, orientation);
+  if (header.empty())
+    throw InputError("'" + path + "': cannot write output file: the fields do not fit the point step");
+  header += "DATA binary\n";
+  detail::OutputFile out(path);
+  out.write(header.data(), header.size());
+  out.write(blob.data.data(), blob.data.size());
+  // PCL sizes its file to one page more than the points and maps the header and the points
+  // into it, so its files end in zeros up to that size; the same zeros keep the output
+  // byte-identical to PCL's (readers ignore bytes after the points).
+  const std::size_t pcl_size = static_cast<std::size_t>(::getpagesize()) + blob.data.size();
+  const std::size_t written = header.size() + blob.data.size();
+  if (pcl_size > written) {
+    const std::vector<char> zeros(pcl_size - written, 0);
+    out.write(zeros.data(), zeros.size());
   }
-  std::error_code ec;
-  if (rc != 0) {
-    fs::remove(tmp, ec);
-    throw InputError("'" + path + "': cannot write output file");
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw InputError("'" + path + "': cannot move output into place: " + ec.message());
-  }
+  out.commit();
 }
 
 bool
@@ -594,13 +605,13 @@ isDepthImagePath(const std::string& path)
 }
 
 LoadedCloud
-loadFrame(const std::string& path, const DepthIntrinsics& intrinsics)
+loadFrame(const std::string& path, const DepthIntrinsics& intrinsics, const MemoryBudget& budget)
 {
   if (!isDepthImagePath(path))
-    return loadCloud(path);
+    return loadCloud(path, true, budget);
   pcl::PointCloud<pcl::PointXYZ> cloud;
   try {
-    cloud = loadDepthPng(path, intrinsics);
+    cloud = loadDepthPng(path, intrinsics, budget);
   } catch (const std::invalid_argument& e) {
     throw InputError(e.what());
   }

@@ -106,3 +106,19 @@ TEST(Parameters, Presets)
   EXPECT_EQ(FilterParameters::preset("paper").normal_presmooth_window, 0);
   EXPECT_THROW(FilterParameters::preset("fancy"), std::invalid_argument);
 }
+
+// More threads than any machine offers (OpenMP would try to create them all and crash) is refused
+// by name and value; the largest accepted count and 0 (= all cores) are valid.
+TEST(Parameters, ThreadCountAboveTheMaximumIsRejected)
+{
+  FilterParameters p;
+  p.threads = 100000;
+  EXPECT_NE(messageOf(p).find("threads = 100000"), std::string::npos) << messageOf(p);
+  EXPECT_NE(messageOf(p).find("1024"), std::string::npos) << messageOf(p);
+  p.threads = 1025;
+  EXPECT_NE(messageOf(p).find("threads = 1025"), std::string::npos);
+  p.threads = 1024;
+  EXPECT_EQ(messageOf(p), "");
+  p.threads = 0;
+  EXPECT_EQ(messageOf(p), "");
+}

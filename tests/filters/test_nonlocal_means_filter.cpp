@@ -532,3 +532,13 @@ TEST(GridConversion, ValidityAndInfinitiesFromTheCoordinateBits)
   EXPECT_NE(errorOf([&] { detail::toGrid(infinite); }).find("infinite coordinate at pixel (1, 2)"),
             std::string::npos);
 }
+
+// setNumberOfThreads with an absurd count: the filter refuses it before OpenMP sees it.
+TEST(NonLocalMeansFilter, AbsurdThreadCountIsRefusedNotCrashed)
+{
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setInputCloud(Cloud::Ptr(new Cloud(noisyPlane(0.001))));
+  f.setNumberOfThreads(100000);
+  Cloud out;
+  EXPECT_NE(errorOf([&] { f.filter(out); }).find("threads = 100000"), std::string::npos);
+}

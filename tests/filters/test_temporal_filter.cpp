@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <deque>
@@ -406,4 +407,68 @@ TEST(TemporalFilter, RecursiveModeStartsANewHistoryAfterANullFrame)
   EXPECT_LE(gap.heldFrames(), 3u);
   // A wanted frame must not be null.
   EXPECT_THROW(gap.push(nullptr, true), std::invalid_argument);
+}
+
+// A cloud whose width x height is not its number of points is refused with std::invalid_argument
+// by all three entry points (the static filter, the temporal filter as the current frame and as
+// a neighbour, the stream), before any point is read: one row too many, a size unrelated to the
+// points, one row too few.
+TEST(TemporalFilter, CloudsWhoseGridDisagreesWithTheirPointsAreRejectedEverywhere)
+{
+  const Cloud good = test::makeCloud(64, 48, boxScene(12), 0.003, 90);
+  ASSERT_EQ(good.size(), 3072u);
+  const std::pair<std::uint32_t, std::uint32_t> shapes[] = {{64, 49}, {100, 100}, {64, 47}};
+  for (const auto& shape : shapes) {
+    SCOPED_TRACE(std::to_string(shape.first) + " x " + std::to_string(shape.second) + " on 3072 points");
+    Cloud::Ptr bad(new Cloud(good));
+    bad->width = shape.first;
+    bad->height = shape.second;
+    const Cloud::ConstPtr fine(new Cloud(good));
+    Cloud out;
+    auto expectInvalid = [](const std::function<void()>& call) {
+      try {
+        call();
+        ADD_FAILURE() << "no error";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("3072 points"), std::string::npos) << e.what();
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "not std::invalid_argument: " << e.what();
+      }
+    };
+
+    NonLocalMeansFilter<pcl::PointXYZ> f;
+    f.setInputCloud(bad);
+    expectInvalid([&] { f.filter(out); });
+
+    // setFrames itself refuses the window (the current frame, a neighbour, a window of one)...
+    TemporalNonLocalMeansFilter<pcl::PointXYZ> t;
+    expectInvalid([&] { t.setFrames({fine, bad, fine}, 1); });
+    expectInvalid([&] { t.setFrames({fine, bad, fine}, 0); });
+    expectInvalid([&] { t.setFrames({bad}, 0); });
+    // ... and a frame changed after setFrames is refused by filter().
+    Cloud::Ptr later_bad(new Cloud(good));
+    t.setFrames({fine, later_bad, fine}, 0);
+    later_bad->width = shape.first;
+    later_bad->height = shape.second;
+    expectInvalid([&] { t.filter(out); });
+    later_bad->width = 64;
+    later_bad->height = 48;
+    t.setFrames({fine, later_bad}, 1);
+    later_bad->points.resize(3072 - 64); // the current frame, a row short
+    try {
+      t.filter(out);
+      ADD_FAILURE() << "no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("3008 points"), std::string::npos) << e.what();
+    }
+    TemporalNonLocalMeansFilter<pcl::PointXYZ> plain; // without setFrames: the input alone
+    plain.setInputCloud(bad);
+    expectInvalid([&] { plain.filter(out); });
+
+    TemporalStream<pcl::PointXYZ> first(1, false, FilterParameters::recommended());
+    expectInvalid([&] { first.push(bad); });
+    TemporalStream<pcl::PointXYZ> later(1, false, FilterParameters::recommended());
+    later.push(fine);
+    expectInvalid([&] { later.push(bad); });
+  }
 }

@@ -135,7 +135,7 @@ TEST_F(DepthImageTest, IntrinsicsCommentsDefaultsAndExplicitScale)
 {
   const std::string file = path("intrinsics.txt");
   writeText(file, "# a comment line\n\n  fx 600.5   # trailing comment\nfy\t601\n"
-                  "depth_format uint16, value / 5000\ndepth_scale 1000\nk1 0.12\n");
+                  "depth_format uint16, value / 5000\ndepth_scale 1000\n");
   const DepthIntrinsics d = readIntrinsics(file);
   EXPECT_DOUBLE_EQ(d.fx, 600.5);
   EXPECT_DOUBLE_EQ(d.fy, 601.0);
@@ -154,6 +154,98 @@ TEST_F(DepthImageTest, IntrinsicsErrorsNameFileAndLine)
   writeText(file, "width 640.5\n");
   expectInvalid([&] { readIntrinsics(file); }, {file, "width"});
   expectInvalid([&] { readIntrinsics(path("missing.txt")); }, {path("missing.txt")});
+}
+
+// A key the reader does not know is refused with its name and line: a misspelt depth_scale must
+// not leave the default scale in place unnoticed.
+TEST_F(DepthImageTest, UnknownIntrinsicsKeysAreRefusedByNameAndLine)
+{
+  const std::string file = path("intrinsics.txt");
+  writeText(file, "fx 600\n# comment\nfy 600\ndepth_scal 1000\n");
+  expectInvalid([&] { readIntrinsics(file); }, {file, "line 4", "unknown key 'depth_scal'"});
+  writeText(file, "fx 600\nk1 0.12\n");
+  expectInvalid([&] { readIntrinsics(file); }, {file, "line 2", "'k1'"});
+}
+
+// Every key of the intrinsics files shipped with the data (and the free-text keys they use:
+// sensor, note, distortion, comments) is known; width and height are read.
+TEST_F(DepthImageTest, EveryShippedIntrinsicsFileAndItsKeysAreAccepted)
+{
+  std::size_t files = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(std::string(RANGE_NLM_SOURCE_DIR) + "/data"))
+    if (entry.path().filename() == "intrinsics.txt") {
+      SCOPED_TRACE(entry.path().string());
+      EXPECT_NO_THROW(readIntrinsics(entry.path().string()));
+      ++files;
+    }
+  EXPECT_GE(files, 2u);
+  const std::string file = path("intrinsics.txt");
+  writeText(file, "# header\nwidth 1920\nheight 1080\nfx 1377.6\nfy 1375.7\ncx 936.5\ncy 537.5\n"
+                  "depth_format uint16 PNG, millimetres, 0 = invalid\n"
+                  "sensor Intel RealSense product id 0B07 (D435)\n"
+                  "note the calibration_rs.yml files are a failed calibration - do not use\n"
+                  "distortion Brown-Conrady rational: 0.54 -0.02 0.00002 -0.00007 -0.002 0.88 0.08 -0.01\n"
+                  "comments free text\ncomment more text\nnotes and more\nsource where it came from\n");
+  const DepthIntrinsics d = readIntrinsics(file);
+  EXPECT_EQ(d.width, 1920);
+  EXPECT_EQ(d.height, 1080);
+  EXPECT_DOUBLE_EQ(d.depth_scale, 1000.0);
+  EXPECT_EQ(d.source, file);
+  const DepthIntrinsics tum = readIntrinsics(kTumIntrinsics);
+  EXPECT_EQ(tum.width, 640);
+  EXPECT_EQ(tum.height, 480);
+}
+
+// Intrinsics that give a size apply only to images of that size.
+TEST_F(DepthImageTest, IntrinsicsOfAnotherSizeAreRefusedWithBothSizes)
+{
+  DepthImage image;
+  image.width = 4;
+  image.height = 3;
+  image.values.assign(12, 5000);
+  const std::string file = path("intrinsics.txt");
+  writeText(file, "width 640\nheight 480\n");
+  const DepthIntrinsics intrinsics = readIntrinsics(file);
+  expectInvalid([&] { depthImageToCloud(image, intrinsics); }, {"4 x 3", "640 x 480", file});
+  writeDepthPng(path("small.png"), image);
+  expectInvalid([&] { loadDepthPng(path("small.png"), intrinsics); }, {path("small.png"), "4 x 3", "640 x 480"});
+  writeText(file, "width 4\nheight 3\n");
+  EXPECT_EQ(depthImageToCloud(image, readIntrinsics(file)).size(), 12u);
+  EXPECT_EQ(depthImageToCloud(image, DepthIntrinsics()).size(), 12u); // no size given: any size
+}
+
+// Values a 16-bit image cannot hold: an error without a DepthClamping, clamped and counted with.
+TEST(DepthImage, OutOfRangeDepthsAreClampedAndCountedWhenAsked)
+{
+  pcl::PointCloud<pcl::PointXYZ> cloud(4, 1);
+  for (auto& p : cloud)
+    p = pcl::PointXYZ(0.0f, 0.0f, 1.0f);
+  cloud[1].z = 13.2f;    // 66000 at scale 5000
+  cloud[2].z = 0.00005f; // 0.25
+  cloud[3].x = cloud[3].y = cloud[3].z = std::nanf("");
+  expectInvalid([&] { cloudToDepthImage(cloud, 5000.0); }, {"pixel (1, 0)"});
+  DepthClamping clamping;
+  const DepthImage image = cloudToDepthImage(cloud, 5000.0, &clamping);
+  EXPECT_EQ(image.values, (std::vector<std::uint16_t>{5000, 65535, 1, 0}));
+  EXPECT_EQ(clamping.above, 1u);
+  EXPECT_EQ(clamping.below, 1u);
+}
+
+// A budget refuses a PNG from its header: the message names the file and the figure.
+TEST_F(DepthImageTest, MemoryBudgetRefusesALargeImageFromItsHeader)
+{
+  DepthImage image;
+  image.width = 200;
+  image.height = 100;
+  image.values.assign(20000, 1000);
+  writeDepthPng(path("image.png"), image);
+  io::MemoryBudget budget;
+  budget.limit_bytes = 200 * 100 * 16 - 1; // one byte short of the cloud's points
+  budget.setting = "--my-limit";
+  expectInvalid([&] { readDepthPng(path("image.png"), budget); },
+                {path("image.png"), "200 x 100 frame needs about 1 MB of memory", "--my-limit"});
+  budget.limit_bytes = 200 * 100 * 16;
+  EXPECT_EQ(readDepthPng(path("image.png"), budget).width, 200);
 }
 
 TEST(ReadDepthPng, TumFrameMatchesAnIndependentDecoder)

@@ -17,6 +17,7 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <signal.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -32,6 +33,9 @@ runTool(const std::string& tool, const std::function<int()>& body)
 {
   // PCL's own console messages would add lines to our one-line errors.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  // A FIFO output whose reader went away then fails a write with EPIPE, reported with the file's
+  // name, instead of killing the tool silently.
+  ::signal(SIGPIPE, SIG_IGN);
   try {
     return body();
   } catch (const UsageError& e) {
@@ -74,7 +78,7 @@ addFilterOptions(po::options_description& options)
     ("search-window", po::value<int>(), ("S, odd side of the search window in pixels [preset: " + std::to_string(d.search_window) + "]").c_str())
     ("patch", po::value<int>(), ("P, odd side of the similarity patch in pixels [preset: " + std::to_string(d.patch_size) + "]").c_str())
     ("iterations", po::value<int>(), ("filter passes [preset: " + std::to_string(d.iterations) + "]").c_str())
-    ("threads", po::value<int>()->default_value(0), "OpenMP threads, 0 = all cores (output does not depend on it)")
+    ("threads", po::value<int>()->default_value(0), "OpenMP threads, 0 = all cores, at most 1024 (output does not depend on it)")
     ("distance-bandwidth", po::value<float>(), "d in cloud units [default: automatic]")
     ("similarity-bandwidth", po::value<float>(), "s in cloud units [default: automatic]")
     ("seed", po::value<std::uint64_t>()->default_value(42), "seed of the bandwidth sample")
@@ -366,6 +370,63 @@ depthIntrinsicsFrom(const po::variables_map& vm)
     throw UsageError(std::string(e.what()) + " (check --fx, --fy, --cx, --cy, --depth-scale and --intrinsics)");
   }
   return intrinsics;
+}
+
+DefaultIntrinsicsWarning::DefaultIntrinsicsWarning(std::string tool, const po::variables_map& vm)
+    : tool_(std::move(tool))
+{
+  if (vm.count("intrinsics"))
+    return;
+  const char* const keys[] = {"fx", "fy", "cx", "cy", "depth-scale"};
+  for (const char* key : keys)
+    if (vm.count(key) && vm[key].defaulted()) {
+      std::ostringstream value;
+      value << vm[key].as<double>();
+      defaults_ += std::string(defaults_.empty() ? "" : ", ") + key + " " + value.str();
+    }
+}
+
+void
+DefaultIntrinsicsWarning::frameRead(const std::string& path)
+{
+  if (defaults_.empty() || !isDepthImagePath(path))
+    return;
+  std::cerr << tool_ << ": warning: '" << path << "' and any other depth PNG are read with default intrinsics ("
+            << defaults_ << ": a 640 x 480 Kinect v1 / TUM RGB-D camera); give --intrinsics FILE or the options "
+            << "for your camera, or the depths and positions are wrong\n"
+            << std::flush;
+  defaults_.clear();
+}
+
+void
+addMemoryLimitOption(po::options_description& options)
+{
+  options.add_options()("memory-limit", po::value<long long>()->default_value(static_cast<long long>(defaultMemoryLimitMb())),
+                        "MB a frame may need (estimated from its file header before it is decoded; a larger frame "
+                        "is refused); 0 = no limit [default: half the physical memory]");
+}
+
+std::uint64_t
+defaultMemoryLimitMb()
+{
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0)
+    return 4096;
+  return std::max<std::uint64_t>(1, std::uint64_t(pages) * std::uint64_t(page) / 2 / (1024 * 1024));
+}
+
+io::MemoryBudget
+memoryBudgetFrom(const po::variables_map& vm,
+                 std::function<std::uint64_t(std::uint64_t, std::uint64_t, std::uint64_t)> estimate)
+{
+  const long long mb = vm["memory-limit"].as<long long>();
+  if (mb < 0 || mb > (1ll << 40))
+    throw UsageError("--memory-limit must be 0 (no limit) or a number of MB up to 2^40, got " + std::to_string(mb));
+  io::MemoryBudget budget;
+  budget.limit_bytes = std::uint64_t(mb) * 1024 * 1024;
+  budget.setting = "--memory-limit";
+  budget.estimate = std::move(estimate);
+  return budget;
 }
 
 std::vector<std::string>

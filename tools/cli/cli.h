@@ -137,6 +137,32 @@ addDepthImageOptions(boost::program_options::options_description& options);
 DepthIntrinsics
 depthIntrinsicsFrom(const boost::program_options::variables_map& vm);
 
+/// Prints, once, a warning on stderr that depth PNGs are being read with default intrinsics
+/// (values the user gave neither with --intrinsics nor explicitly), naming the first such file
+/// and the defaults used. Call frameRead() for every frame read; PCD frames are ignored.
+class DefaultIntrinsicsWarning
+{
+public:
+  DefaultIntrinsicsWarning(std::string tool, const boost::program_options::variables_map& vm);
+  void frameRead(const std::string& path);
+
+private:
+  std::string tool_;
+  std::string defaults_; // empty: nothing defaulted, or already warned
+};
+
+/// Adds --memory-limit MB (see defaultMemoryLimitMb).
+void
+addMemoryLimitOption(boost::program_options::options_description& options);
+/// The default of --memory-limit: half the machine's physical memory, in MB (4096 if unknown).
+std::uint64_t
+defaultMemoryLimitMb();
+/// The budget of --memory-limit (0 = no limit) with `estimate` of the bytes a frame needs.
+/// Throws UsageError for a negative or absurd value.
+io::MemoryBudget
+memoryBudgetFrom(const boost::program_options::variables_map& vm,
+                 std::function<std::uint64_t(std::uint64_t, std::uint64_t, std::uint64_t)> estimate);
+
 /// The frames of an input directory, sorted by name: its *.pcd files if it has any, otherwise
 /// its *.png depth images. Throws InputError if the directory is missing or holds neither.
 std::vector<std::string>

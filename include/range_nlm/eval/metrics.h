@@ -45,7 +45,7 @@ struct EvaluationOptions
   /// Truth points of consecutive frames closer than this, metres, count as unchanged (static).
   /// >= 0, default 1e-5.
   double change_tolerance = 1e-5;
-  /// OpenMP threads of the normal estimation; 0 = all. >= 0.
+  /// OpenMP threads of the normal estimation; 0 = all. 0 ... 1024.
   int threads = 0;
 
   /// Throws std::invalid_argument naming the first invalid option and its value.

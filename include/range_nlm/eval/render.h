@@ -106,7 +106,7 @@ struct RenderParameters
   int gap = 8;
   /// Colour of that strip. Default white.
   Rgb gap_colour = {255, 255, 255};
-  /// OpenMP threads; 0 = as many as OpenMP offers. Output does not depend on it. >= 0, default 0.
+  /// OpenMP threads; 0 = as many as OpenMP offers. Output does not depend on it. 0 ... 1024, default 0.
   int threads = 0;
 
   /// Throws std::invalid_argument naming the first invalid parameter and its value.

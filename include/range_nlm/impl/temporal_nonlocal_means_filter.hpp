@@ -17,9 +17,16 @@ TemporalNonLocalMeansFilter<PointT>::setFrames(const std::deque<PointCloudConstP
   if (current >= frames.size())
     throw std::invalid_argument("range_nlm: current frame index " + std::to_string(current) +
                                 " is outside the " + std::to_string(frames.size()) + " frames given");
-  for (std::size_t k = 0; k < frames.size(); ++k)
+  for (std::size_t k = 0; k < frames.size(); ++k) {
     if (!frames[k])
       throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null");
+    // Refused here, where the caller hands the frames over, not at the next filter() call.
+    const PointCloud& f = *frames[k];
+    if (f.points.size() != static_cast<std::size_t>(f.width) * f.height)
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " of the temporal window holds " +
+                                  std::to_string(f.points.size()) + " points but declares width x height = " +
+                                  std::to_string(f.width) + " x " + std::to_string(f.height));
+  }
   frames_ = frames;
   current_ = current;
   this->setInputCloud(frames[current]);

@@ -9,6 +9,8 @@
 /// point (u, v) is index v * width + u. Pixels of value 0 become NaN in x, y and z.
 #pragma once
 
+#include <range_nlm/io/memory_budget.h>
+
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -34,6 +36,13 @@ struct DepthIntrinsics
   /// Stored values per metre: z [m] = value / depth_scale. > 0; default 5000 (TUM RGB-D);
   /// 1000 for millimetre images (RealSense, Azure Kinect).
   double depth_scale = 5000.0;
+  /// Image size the intrinsics belong to, pixels; 0 = not known (any size is accepted). Set
+  /// from the `width` / `height` lines of an intrinsics file; depthImageToCloud refuses an image
+  /// of another size.
+  int width = 0;
+  int height = 0;
+  /// The intrinsics file these values came from (named in messages); empty if none.
+  std::string source;
 
   /// Throws std::invalid_argument naming the first invalid field and its value.
   void validate() const;
@@ -41,12 +50,15 @@ struct DepthIntrinsics
 
 /// Reads an `intrinsics.txt` file: one `key value` pair per line, `#` starts a comment, blank
 /// lines are skipped. Numeric keys: `fx`, `fy`, `cx`, `cy` (pixels), `depth_scale` (values per
-/// metre); `width` and `height` are checked to be positive integers. A `depth_format` line is free
-/// text; when there is no `depth_scale` line, the scale is taken from it if it says
-/// `value / N` (scale N) or `millimetres`/`millimeters` (scale 1000). Other keys (e.g. lens
-/// distortion coefficients) are ignored. Missing keys keep their value from `defaults`.
-/// Throws std::invalid_argument naming the file (and line) if it cannot be read, a numeric value
-/// does not parse, or the result fails DepthIntrinsics::validate().
+/// metre), `width` and `height` (positive integers: the image size the intrinsics belong to,
+/// checked against every image read with them). A `depth_format` line is free text; when there
+/// is no `depth_scale` line, the scale is taken from it if it says `value / N` (scale N) or
+/// `millimetres`/`millimeters` (scale 1000). The free-text keys `sensor`, `distortion`, `note`,
+/// `notes`, `comment`, `comments` and `source` are documentation and not read. Any other key is
+/// refused (a misspelt `depth_scale` must not silently leave the default in place). Missing keys
+/// keep their value from `defaults`; `source` is set to `path`.
+/// Throws std::invalid_argument naming the file (and line) if it cannot be read, a key is
+/// unknown, a numeric value does not parse, or the result fails DepthIntrinsics::validate().
 DepthIntrinsics
 readIntrinsics(const std::string& path, const DepthIntrinsics& defaults = DepthIntrinsics());
 
@@ -60,37 +72,56 @@ struct DepthImage
 
 /// Reads a 16-bit greyscale PNG (any interlacing). Throws std::invalid_argument naming the file
 /// if it is missing, not a PNG, damaged, or not 16-bit greyscale (the message gives the bit depth
-/// and colour type found).
+/// and colour type found), or if the size its header announces does not fit `budget` (checked
+/// with a point step of 16 bytes, an organized PointXYZ cloud, before any pixel is decoded).
 DepthImage
-readDepthPng(const std::string& path);
+readDepthPng(const std::string& path, const io::MemoryBudget& budget = io::MemoryBudget());
 
 /// Writes a 16-bit greyscale PNG, first to a temporary file in the same directory, then renamed
-/// into place. Throws std::invalid_argument naming the file if the image is inconsistent or the
-/// file cannot be written.
+/// into place (a symbolic link is followed and kept; a character device or FIFO is written
+/// directly; see io::saveCloudAtomic). Throws std::invalid_argument naming the file if the image
+/// is inconsistent or the file cannot be written (e.g. "No space left on device"); no partial
+/// file is left.
 void
 writeDepthPng(const std::string& path, const DepthImage& image);
 
 /// Back-projects a depth image with `intrinsics` (see the file comment). The result is organized
 /// (width x height), `is_dense` is true only if no pixel is 0. Throws std::invalid_argument if
-/// the intrinsics are invalid or the image is empty.
+/// the intrinsics are invalid, the image is empty, or the intrinsics give a width and height
+/// other than the image's (the message gives both sizes and the intrinsics file).
 pcl::PointCloud<pcl::PointXYZ>
 depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics);
 
+/// How many valid points cloudToDepthImage clamped into the 16-bit range.
+struct DepthClamping
+{
+  /// Points deeper than 65535.5 / depth_scale metres, stored as 65535.
+  std::size_t above = 0;
+  /// Points nearer than 0.5 / depth_scale metres (or at z <= 0), stored as 1 (0 means "no
+  /// measurement", which they are not).
+  std::size_t below = 0;
+};
+
 /// Encodes the z of an organized cloud as depth values round(z * depth_scale); NaN points give 0.
-/// x and y are not stored (a reader recomputes them from the intrinsics). Throws
-/// std::invalid_argument naming the pixel and its z if a valid point's value would fall outside
-/// 1 ... 65535 (z <= 0, or z >= 65535.5 / depth_scale metres), if `depth_scale` is not a
+/// x and y are not stored (a reader recomputes them from the intrinsics). A valid point whose
+/// value falls outside 1 ... 65535 (z <= 0, or z >= 65535.5 / depth_scale metres) is clamped to
+/// that range and counted in `*clamping` if `clamping` is given (a filtered depth image close to
+/// the sensor's largest value can move a little beyond it); without `clamping` it is an error:
+/// std::invalid_argument naming the pixel and its z. Also throws if `depth_scale` is not a
 /// positive finite number, or if the cloud is empty or its width * height is not its size.
 DepthImage
-cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale);
+cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale,
+                  DepthClamping* clamping = nullptr);
 
 /// readDepthPng + depthImageToCloud; errors name the file.
 pcl::PointCloud<pcl::PointXYZ>
-loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics);
+loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics,
+             const io::MemoryBudget& budget = io::MemoryBudget());
 
 /// cloudToDepthImage + writeDepthPng; errors name the file.
 void
-saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale);
+saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale,
+             DepthClamping* clamping = nullptr);
 
 namespace detail
 {
@@ -106,9 +137,12 @@ struct PngPixels
   int bit_depth = 0;
   std::vector<std::uint8_t> bytes;
 };
-/// Reads any PNG with libpng. Throws std::invalid_argument naming the file on any failure.
+/// Reads any PNG with libpng. Throws std::invalid_argument naming the file on any failure,
+/// including a size (from the header, before decoding) that does not fit `budget` with
+/// `point_step` bytes a pixel.
 PngPixels
-readPng(const std::string& path);
+readPng(const std::string& path, const io::MemoryBudget& budget = io::MemoryBudget(),
+        std::uint64_t point_step = 0);
 /// Writes `pixels` (channels 1 or 3, bit depth 8 or 16) with libpng, atomically (temporary file
 /// then rename). Throws std::invalid_argument naming the file on any failure. Shared by the
 /// depth-image and rendering code.

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/memory_budget.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
@@ -33,10 +34,11 @@ struct LoadedCloud
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
 };
 /// Loads a PCD file with checks: exists, non-empty, parsable, has float x, y, z fields,
-/// width * height points, organized if `organized`. The whole header and the body's size are
-/// validated before PCL decodes the body. Errors name the file.
+/// width * height points, organized if `organized`, and a size that fits `budget` (from the
+/// header, before the body is read). The whole header and the body's size are validated before
+/// PCL decodes the body. Errors name the file.
 LoadedCloud
-loadCloud(const std::string& path, bool organized = true);
+loadCloud(const std::string& path, bool organized = true, const MemoryBudget& budget = MemoryBudget());
 
 /// x, y, z of a blob (FLOAT32 or FLOAT64 fields) as an organized PointXYZ cloud, with the
 /// blob's width, height and sensor pose. Throws InputError (naming `path`) on infinite values.
@@ -46,8 +48,13 @@ xyzFromBlob(const LoadedCloud& cloud, const std::string& path);
 void
 writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& blob);
 
-/// Saves binary PCD to a temporary name in the same directory and renames it into place, so no
-/// half-written file ever carries the final name. Throws InputError naming the file.
+/// Saves binary PCD (the bytes PCL's PCDWriter::writeBinary writes) with write(2), every return
+/// checked: to a temporary name in the same directory, fsynced and renamed into place, so no
+/// half-written file ever carries the final name and a full disk gives an error, never SIGBUS.
+/// A symbolic link is followed (its target is replaced, the link stays); a character device
+/// (/dev/null) or FIFO is written directly; a directory, block device or socket is refused.
+/// Throws InputError naming the file (and the system's reason, e.g. "No space left on device");
+/// the temporary file is removed on every failure.
 void
 saveCloudAtomic(const std::string& path, const pcl::PCLPointCloud2& blob,
                 const Eigen::Vector4f& origin = Eigen::Vector4f::Zero(),
@@ -67,9 +74,10 @@ bool
 isDepthImagePath(const std::string& path);
 
 /// Loads one organized frame: a PCD file through loadCloud() (all fields), or a 16-bit depth PNG
-/// back-projected with `intrinsics` into a blob with fields x, y, z. Errors name the file.
+/// back-projected with `intrinsics` into a blob with fields x, y, z. Either is refused before its
+/// body is decoded if its size does not fit `budget`. Errors name the file.
 LoadedCloud
-loadFrame(const std::string& path, const DepthIntrinsics& intrinsics);
+loadFrame(const std::string& path, const DepthIntrinsics& intrinsics, const MemoryBudget& budget = MemoryBudget());
 
 } // namespace io
 } // namespace range_nlm

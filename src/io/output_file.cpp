@@ -1,0 +1,177 @@
+#include "output_file.h"
+
+#include <range_nlm/io/pcd_file.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace range_nlm
+{
+namespace io
+{
+namespace detail
+{
+
+namespace
+{
+std::string
+kindOf(mode_t mode)
+{
+  if (S_ISDIR(mode))
+    return "a directory";
+  if (S_ISBLK(mode))
+    return "a block device";
+  if (S_ISSOCK(mode))
+    return "a socket";
+  return "not a regular file, character device or FIFO";
+}
+
+/// `path` with every symbolic link of its last component followed (a dangling link gives the
+/// path it points to). Sets `error` (errno) if a link cannot be read or links loop.
+std::string
+followLinks(const std::string& path, int& error)
+{
+  std::string current = path;
+  for (int hop = 0; hop < 40; ++hop) {
+    struct stat st;
+    if (::lstat(current.c_str(), &st) != 0) {
+      if (errno != ENOENT)
+        error = errno;
+      return current; // a new file (or an error reported by the caller)
+    }
+    if (!S_ISLNK(st.st_mode))
+      return current;
+    std::error_code ec;
+    const fs::path link = fs::read_symlink(current, ec);
+    if (ec) {
+      error = ec.value();
+      return current;
+    }
+    current = link.is_absolute() ? link.string() : (fs::path(current).parent_path() / link).string();
+  }
+  error = ELOOP;
+  return current;
+}
+} // namespace
+
+OutputFile::OutputFile(const std::string& path) : path_(path)
+{
+  int error = 0;
+  target_ = followLinks(path, error);
+  if (error != 0)
+    fail("cannot resolve the output path", error);
+  struct stat st;
+  const bool exists = ::stat(target_.c_str(), &st) == 0;
+  if (!exists && errno != ENOENT)
+    fail("cannot examine the output path", errno);
+  if (exists && (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode))) {
+    do
+      fd_ = ::open(target_.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY);
+    while (fd_ < 0 && errno == EINTR);
+    if (fd_ < 0)
+      fail(std::string("cannot open the ") + (S_ISCHR(st.st_mode) ? "device" : "FIFO") + " for writing", errno);
+    return;
+  }
+  if (exists && !S_ISREG(st.st_mode))
+    throw InputError("'" + path_ + "'" + (target_ != path_ ? " (a link to '" + target_ + "')" : std::string()) +
+                     ": is " + kindOf(st.st_mode) +
+                     "; refusing to write over it (give a regular file, a character device such as /dev/null, or a "
+                     "FIFO)");
+  const fs::path target(target_);
+  temporary_ = (target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid())))
+                   .string();
+  fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    const int e = errno;
+    temporary_.clear(); // nothing to remove
+    fail("cannot create the output file", e);
+  }
+}
+
+OutputFile::~OutputFile()
+{
+  if (!committed_)
+    discard();
+}
+
+void
+OutputFile::discard() noexcept
+{
+  if (fd_ >= 0)
+    ::close(fd_);
+  fd_ = -1;
+  if (!temporary_.empty())
+    ::unlink(temporary_.c_str());
+}
+
+void
+OutputFile::fail(const std::string& what, int error)
+{
+  discard();
+  committed_ = true; // nothing left to clean up
+  std::string message = "'" + path_ + "'";
+  if (!target_.empty() && target_ != path_)
+    message += " (a link to '" + target_ + "')";
+  message += ": " + what + ": " + std::strerror(error);
+  if (error == ENOSPC || error == EDQUOT)
+    message += " (the disk is full; nothing was written under this name)";
+  throw InputError(message);
+}
+
+int
+OutputFile::tryWrite(const void* data, std::size_t size) noexcept
+{
+  if (error_ != 0)
+    return error_;
+  const char* p = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd_, p, size);
+    if (n < 0) {
+      if (errno == EINTR)
+        continue;
+      error_ = errno;
+      return error_;
+    }
+    if (n == 0) { // no progress and no error: treat as a full device
+      error_ = ENOSPC;
+      return error_;
+    }
+    p += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
+void
+OutputFile::write(const void* data, std::size_t size)
+{
+  if (tryWrite(data, size) != 0)
+    fail("cannot write the output file", error_);
+}
+
+void
+OutputFile::commit()
+{
+  if (error_ != 0)
+    fail("cannot write the output file", error_);
+  if (!direct() && ::fsync(fd_) != 0)
+    fail("cannot write the output file to disk (fsync)", errno);
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0 && errno != EINTR)
+    fail("cannot close the output file", errno);
+  if (!direct() && ::rename(temporary_.c_str(), target_.c_str()) != 0)
+    fail("cannot move the output file into place", errno);
+  committed_ = true;
+}
+
+} // namespace detail
+} // namespace io
+} // namespace range_nlm
