@@ -9,6 +9,10 @@
 
 #include <nlohmann/json.hpp>
 
+#ifdef RANGE_NLM_WITH_ROS
+#include <range_nlm/ros/bag_filter.h>
+#endif
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -42,6 +46,7 @@ const char* const kUsage =
     "  range_nlm_denoise --input-dir DIR --output-dir DIR --pass search=19,patch=11,radius=1 --pass "
     "search=11,patch=5,radius=0\n"
     "  range_nlm_denoise --input-dir DIR --output-dir DIR --shard K/N [options]\n"
+    "  range_nlm_denoise --input-bag IN.bag --topic /camera/depth/points --output-bag OUT.bag [options]\n"
     "Filters organized range frames with the feature-preserving non-local filter. Every field of\n"
     "the input is kept; only x, y, z move. Outputs are binary PCD.\n"
     "16-bit depth PNGs (INPUT.png, or a directory of *.png) are read with the intrinsics options;\n"
@@ -55,7 +60,11 @@ const char* const kUsage =
     "3 done with --keep-going but some frames were skipped.\n"
     "--shard K/N writes only the K-th of N contiguous parts of the frames (K from 0), reading the\n"
     "frames around it that its temporal windows need, so that the N parts together are the output\n"
-    "of one run, byte for byte; N runs may write into one output directory at once (docs/cluster.md).";
+    "of one run, byte for byte; N runs may write into one output directory at once (docs/cluster.md).\n"
+    "\n"
+    "With --input-bag every sensor_msgs/PointCloud2 message of --topic is filtered (static or\n"
+    "temporal, one pass) and every other message copied unchanged, with its record time; no ROS\n"
+    "master is needed (builds with ROS support only).";
 
 /// --recursive with --shard: default frames of history replayed before a shard, per frame of the
 /// largest recursive radius (docs/cluster.md has the measurement behind it).
@@ -516,6 +525,9 @@ addOptions(po::options_description& options)
     ("recursive", "temporal neighbours are the last R filtered outputs: no output delay, the whole history carried "
                   "along at the cost of R frames (implies --causal)")
     ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
+    ("input-bag", po::value<std::string>(), "rosbag whose --topic PointCloud2 messages are filtered (other topics copied)")
+    ("output-bag", po::value<std::string>(), "rosbag written with the filtered messages (same topics and record times)")
+    ("topic", po::value<std::string>(), "topic of organized sensor_msgs/PointCloud2 messages to filter (with --input-bag)")
     ("overwrite", "allow the output to be the input (file or directory)")
     ("resume", "skip frames whose output already exists and is a complete frame of the input's size "
                "(temporal runs still read them as neighbours); removes temporary files an interrupted run left")
@@ -944,6 +956,99 @@ printJson(const Summary& s, const Job& job)
   std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
 }
 
+/// --input-bag: filters one topic of a rosbag (ros/, range_nlm_ros::filterBag).
+int
+runBag(const po::variables_map& vm)
+{
+#ifndef RANGE_NLM_WITH_ROS
+  (void)vm;
+  throw UsageError("--input-bag: this range_nlm_denoise was built without ROS support (install the ROS packages "
+                   "of scripts/setup.sh and rebuild)");
+#else
+  for (const char* other : {"input", "output", "input-dir", "output-dir"})
+    if (vm.count(other))
+      throw UsageError(std::string("--input-bag cannot be combined with ") +
+                       (std::string(other).find("dir") == std::string::npos ? "INPUT/OUTPUT files" : "--input-dir/--output-dir"));
+  for (const char* needed : {"input-bag", "output-bag", "topic"})
+    if (!vm.count(needed))
+      throw UsageError("bag mode needs --input-bag, --output-bag and --topic (missing --" + std::string(needed) + ")");
+  for (const char* unsupported : {"pass", "resume", "colorize"})
+    if (vm.count(unsupported))
+      throw UsageError(std::string("--") + unsupported + " is not supported with --input-bag");
+  if (vm["output-format"].as<std::string>() != "auto")
+    throw UsageError("--output-format is not supported with --input-bag (the bag keeps the messages' layout)");
+  range_nlm_ros::BagFilterOptions options;
+  options.input_bag = vm["input-bag"].as<std::string>();
+  options.output_bag = vm["output-bag"].as<std::string>();
+  options.topic = vm["topic"].as<std::string>();
+  options.keep_going = vm.count("keep-going") > 0;
+  options.settings.parameters = filterParametersFrom(vm);
+  options.settings.temporal_radius = vm["temporal-radius"].as<int>();
+  if (options.settings.temporal_radius < 0)
+    throw UsageError("--temporal-radius must be >= 0, got " + std::to_string(options.settings.temporal_radius));
+  options.settings.window = vm.count("recursive") ? TemporalWindow::recursive
+                            : vm.count("causal")  ? TemporalWindow::causal
+                                                  : TemporalWindow::centred;
+  const bool quiet = vm.count("quiet") > 0, json = vm.count("json") > 0;
+  std::unique_ptr<Progress> progress;
+  const auto start = std::chrono::steady_clock::now();
+  range_nlm_ros::BagFilterReport report;
+  try {
+    report = range_nlm_ros::filterBag(options, [&](std::size_t done, std::size_t total) {
+      if (!progress)
+        progress = std::make_unique<Progress>("range_nlm_denoise", total, options.settings.parameters.iterations,
+                                              !quiet && !json);
+      progress->update(done);
+    });
+  } catch (const range_nlm_ros::BagError& e) {
+    if (progress)
+      progress->finish();
+    throw InputError(e.what());
+  }
+  if (progress)
+    progress->finish();
+  std::size_t unfiltered = 0;
+  double total_ms = 0.0;
+  for (const auto& frame : report.frames) {
+    unfiltered += !frame.unfiltered.empty();
+    total_ms += frame.milliseconds;
+  }
+  if (json) {
+    nlohmann::json out;
+    nlohmann::json invalid = nlohmann::json::array();
+    for (const auto& i : report.invalid)
+      invalid.push_back({{"message", i.first}, {"error", i.second}});
+    out["frames"] = report.frames.size();
+    out["unfiltered"] = unfiltered;
+    out["invalid"] = invalid;
+    out["copied"] = report.copied;
+    out["restarts"] = report.restarts;
+    out["filter_ms_total"] = total_ms;
+    out["wall_ms"] = millisecondsSince(start);
+    std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
+  } else if (!quiet) {
+    for (const auto& frame : report.frames)
+      if (frame.unfiltered.empty())
+        std::cout << frame.message << ": " << std::fixed << std::setprecision(1) << frame.milliseconds << " ms"
+                  << std::endl;
+      else
+        std::cout << frame.message << ": not filtered, written unchanged (" << frame.unfiltered << ")" << std::endl;
+    std::cout << options.output_bag << ": " << report.frames.size() << " message(s) of " << options.topic
+              << " filtered (" << unfiltered << " unchanged), " << report.copied << " other message(s) copied"
+              << std::endl;
+  }
+  if (!report.invalid.empty()) {
+    std::cerr << "range_nlm_denoise: " << report.invalid.size() << " message(s) of " << options.topic
+              << " are not organized clouds and were copied unchanged:\n";
+    for (const auto& i : report.invalid)
+      std::cerr << "  " << i.first << ": " << i.second << "\n";
+    std::cerr << std::flush;
+    return 3;
+  }
+  return 0;
+#endif
+}
+
 int
 run(int argc, char** argv)
 {
@@ -954,6 +1059,8 @@ run(int argc, char** argv)
   po::variables_map vm;
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
+  if (vm.count("input-bag") || vm.count("output-bag") || vm.count("topic"))
+    return runBag(vm);
   const Job job = jobFrom(vm);
   // Shards of one recording share the directory and hold their own frames.
   const OutputDirectoryLock lock(job.single ? std::filesystem::path(job.outputs.front()).parent_path().string()

@@ -1,0 +1,23 @@
+// range_nlm_node: the nodelet range_nlm/TemporalFilterNodelet run as a node of its own (same
+// topics and private parameters), for use without a nodelet manager.
+#include <range_nlm/ros/temporal_filter_nodelet.h>
+
+#include <ros/ros.h>
+
+#include <cstdio>
+
+int
+main(int argc, char** argv)
+{
+  // Log lines (ROS_INFO goes to stdout) reach a log file or a pipe as they happen.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  ros::init(argc, argv, "range_nlm");
+  range_nlm_ros::TemporalFilterNodelet filter;
+  const nodelet::V_string my_argv(argv + 1, argv + argc);
+  filter.init(ros::this_node::getName(), ros::names::getRemappings(), my_argv);
+  if (!filter.configured())
+    return 1;
+  // The filter takes most of a frame's time: one thread for callbacks keeps frames in order.
+  ros::spin();
+  return 0;
+}

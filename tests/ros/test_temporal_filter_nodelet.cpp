@@ -1,0 +1,407 @@
+// The nodelet against a real ROS master: range_nlm_node and a nodelet manager with the plugin
+// loaded, fed PointCloud2 and depth image messages; outputs equal the library's TemporalStream on
+// the same frames, bad messages are dropped with a log line naming their stamp.
+#include "ros_test_support.h"
+#include "test_support.h"
+
+#include <range_nlm/io/depth_image.h>
+#include <range_nlm/temporal_stream.h>
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+using namespace range_nlm;
+using namespace range_nlm::test;
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+namespace
+{
+
+RosMaster* g_master = nullptr;
+
+/// The master for the whole test program, and this process as a ROS node.
+class RosEnvironment : public ::testing::Environment
+{
+public:
+  RosEnvironment(int argc, char** argv) : argc_(argc), argv_(argv) {}
+  void SetUp() override
+  {
+    g_master = new RosMaster();
+    ros::init(argc_, argv_, "range_nlm_test", ros::init_options::AnonymousName | ros::init_options::NoSigintHandler);
+    ASSERT_TRUE(ros::master::check()) << "no master at " << g_master->uri();
+    spinner_ = std::make_unique<ros::AsyncSpinner>(2);
+    spinner_->start();
+  }
+  void TearDown() override
+  {
+    if (spinner_)
+      spinner_->stop();
+    ros::shutdown();
+    delete g_master; // stops rosmaster
+    g_master = nullptr;
+  }
+
+private:
+  int argc_;
+  char** argv_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
+
+/// Messages received on a topic, in order.
+template <typename Message>
+class Inbox
+{
+public:
+  explicit Inbox(const std::string& topic)
+  {
+    ros::NodeHandle node;
+    subscriber_ = node.subscribe<Message>(topic, 50, [this](const typename Message::ConstPtr& m) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      messages_.push_back(m);
+      arrived_.notify_all();
+    });
+  }
+  /// The next message, or null after `seconds`.
+  typename Message::ConstPtr next(double seconds = 30.0)
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    arrived_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return !messages_.empty(); });
+    if (messages_.empty())
+      return nullptr;
+    auto m = messages_.front();
+    messages_.pop_front();
+    return m;
+  }
+  std::size_t pending()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return messages_.size();
+  }
+  std::uint32_t publishers() const { return subscriber_.getNumPublishers(); }
+
+private:
+  ros::Subscriber subscriber_;
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::deque<typename Message::ConstPtr> messages_;
+};
+
+/// Waits until `done` holds (true) or 20 s pass (false).
+template <typename Condition>
+bool
+waitFor(const Condition& done)
+{
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline)
+      return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+std::string
+readLog(const std::string& path)
+{
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+/// Frame k of a noisy scene with a depth step and holes, w x h.
+Cloud::Ptr
+frame(int k, int w = 64, int h = 48)
+{
+  Cloud::Ptr cloud(new Cloud(makeCloud(w, h, step(w / 2, 1.5, 2.0), 0.004, 1000 + k)));
+  punchHoles(*cloud, 0.03, 2000 + k);
+  return cloud;
+}
+
+FilterParameters
+testParameters()
+{
+  FilterParameters p = FilterParameters::recommended();
+  p.search_window = 7;
+  p.patch_size = 3;
+  return p;
+}
+
+std::string
+nodeExecutable()
+{
+  return std::string(RANGE_NLM_ROS_DEVEL_PREFIX) + "/lib/range_nlm/range_nlm_node";
+}
+
+TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
+{
+  ros::param::set("/rnlm_points/temporal_radius", 1);
+  ros::param::set("/rnlm_points/search_window", 7);
+  ros::param::set("/rnlm_points/patch", 3);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_points", "input:=/rnlm/in", "output:=/rnlm/out"},
+                    g_master->directory() + "/rnlm_points.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/rnlm/in", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/rnlm/out");
+  ASSERT_TRUE(waitFor([&] { return input.getNumSubscribers() > 0 && output.publishers() > 0; }))
+      << readLog(node.log());
+
+  TemporalStream<pcl::PointXYZ> expected_stream(1, TemporalWindow::causal, testParameters());
+  std::uint32_t sec = 100;
+  auto expectFiltered = [&](const Cloud::Ptr& cloud, TemporalStream<pcl::PointXYZ>& stream) {
+    const sensor_msgs::PointCloud2 in = toPointCloud2(*cloud, ++sec, 250);
+    input.publish(in);
+    const auto out = output.next();
+    ASSERT_TRUE(out) << "no output for " << stampText(sec, 250) << "\n" << readLog(node.log());
+    EXPECT_EQ(out->header.stamp, in.header.stamp);
+    EXPECT_EQ(out->header.frame_id, in.header.frame_id);
+    EXPECT_EQ(out->fields.size(), in.fields.size());
+    EXPECT_EQ(out->point_step, in.point_step);
+    EXPECT_EQ(out->row_step, in.row_step);
+    ASSERT_EQ(out->data.size(), in.data.size());
+    const auto ready = stream.push(cloud);
+    ASSERT_EQ(ready.size(), 1u);
+    EXPECT_EQ(compareXyz(xyzOf(*out), *ready[0]), "");
+    bool others_kept = true; // every byte but x, y, z (intensity, ring, padding)
+    for (std::size_t i = 0; i < in.data.size(); ++i)
+      others_kept = others_kept && (i % in.point_step < 12 || out->data[i] == in.data[i]);
+    EXPECT_TRUE(others_kept);
+  };
+  for (int k = 0; k < 3; ++k)
+    expectFiltered(frame(k), expected_stream);
+
+  // Bad messages: each is dropped (no output, the stream unchanged), the next good frame is
+  // filtered with the good frames before it as its window.
+  const Cloud::Ptr good = frame(3);
+  sensor_msgs::PointCloud2 wrong_row_step = toPointCloud2(*good, 500, 1);
+  wrong_row_step.row_step += 4;
+  sensor_msgs::PointCloud2 unorganized = toPointCloud2(*good, 501, 2);
+  unorganized.width *= unorganized.height;
+  unorganized.height = 1;
+  unorganized.row_step = unorganized.width * unorganized.point_step;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const sensor_msgs::PointCloud2 nan_only =
+      toPointCloud2(Cloud(good->width, good->height, pcl::PointXYZ(nan, nan, nan)), 502, 3);
+  for (const sensor_msgs::PointCloud2* bad :
+       std::vector<const sensor_msgs::PointCloud2*>{&wrong_row_step, &unorganized, &nan_only}) {
+    input.publish(*bad);
+    expectFiltered(frame(int(sec)), expected_stream); // the output that comes is the good frame's
+  }
+  const std::string log = readLog(node.log());
+  EXPECT_NE(log.find("dropped PointCloud2 on /rnlm/in (" + stampText(500, 1)), std::string::npos) << log;
+  EXPECT_NE(log.find("row_step"), std::string::npos) << log;
+  EXPECT_NE(log.find("dropped PointCloud2 on /rnlm/in (" + stampText(501, 2)), std::string::npos) << log;
+  EXPECT_NE(log.find("unorganized"), std::string::npos) << log;
+  EXPECT_NE(log.find("dropped PointCloud2 on /rnlm/in (" + stampText(502, 3)), std::string::npos) << log;
+  EXPECT_NE(log.find("no valid point"), std::string::npos) << log;
+
+  // Another frame size starts a new window: the result is that of a fresh stream.
+  TemporalStream<pcl::PointXYZ> smaller(1, TemporalWindow::causal, testParameters());
+  expectFiltered(frame(20, 40, 30), smaller);
+  expectFiltered(frame(21, 40, 30), smaller);
+  EXPECT_NE(readLog(node.log()).find("temporal window restarted"), std::string::npos);
+  EXPECT_TRUE(node.running()) << readLog(node.log());
+  EXPECT_EQ(output.pending(), 0u);
+}
+
+TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
+{
+  ros::param::set("/rnlm_centred/temporal_radius", 1);
+  ros::param::set("/rnlm_centred/causal", false);
+  ros::param::set("/rnlm_centred/search_window", 7);
+  ros::param::set("/rnlm_centred/patch", 3);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_centred", "input:=/centred/in", "output:=/centred/out"},
+                    g_master->directory() + "/rnlm_centred.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/centred/in", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/centred/out");
+  ASSERT_TRUE(waitFor([&] { return input.getNumSubscribers() > 0 && output.publishers() > 0; }))
+      << readLog(node.log());
+  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::centred, testParameters());
+  std::vector<Cloud::Ptr> frames;
+  for (int k = 0; k < 4; ++k) {
+    frames.push_back(frame(k));
+    input.publish(toPointCloud2(*frames.back(), 10 + k, 0));
+    const auto ready = expected.push(frames.back());
+    if (k == 0) {
+      EXPECT_TRUE(ready.empty());
+      EXPECT_FALSE(output.next(1.0)) << "frame 0 came out before its successor arrived";
+      continue;
+    }
+    ASSERT_EQ(ready.size(), 1u);
+    const auto out = output.next();
+    ASSERT_TRUE(out) << readLog(node.log());
+    EXPECT_EQ(out->header.stamp.sec, std::uint32_t(10 + k - 1)); // frame k - 1, a frame late
+    EXPECT_EQ(compareXyz(xyzOf(*out), *ready[0]), "");
+  }
+}
+
+/// The 16UC1 image of a cloud's z (millimetres, 0 = no depth).
+sensor_msgs::Image
+depth16(const Cloud& cloud, std::uint32_t sec)
+{
+  sensor_msgs::Image image;
+  image.header.stamp.sec = sec;
+  image.header.frame_id = "camera_depth_optical_frame";
+  image.width = cloud.width;
+  image.height = cloud.height;
+  image.encoding = "16UC1";
+  image.step = image.width * 2;
+  image.data.resize(std::size_t(image.step) * image.height);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const std::uint16_t v = std::isfinite(cloud[i].z) ? std::uint16_t(std::lround(cloud[i].z * 1000.0)) : 0;
+    std::memcpy(&image.data[i * 2], &v, 2);
+  }
+  return image;
+}
+
+/// The 32FC1 image of a cloud's z (metres, NaN = no depth).
+sensor_msgs::Image
+depth32(const Cloud& cloud, std::uint32_t sec)
+{
+  sensor_msgs::Image image = depth16(cloud, sec);
+  image.encoding = "32FC1";
+  image.step = image.width * 4;
+  image.data.resize(std::size_t(image.step) * image.height);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    std::memcpy(&image.data[i * 4], &cloud[i].z, 4);
+  return image;
+}
+
+sensor_msgs::CameraInfo
+cameraInfo(int w, int h)
+{
+  sensor_msgs::CameraInfo info;
+  info.width = w;
+  info.height = h;
+  info.K = {300.0, 0.0, (w - 1) / 2.0, 0.0, 300.0, (h - 1) / 2.0, 0.0, 0.0, 1.0};
+  return info;
+}
+
+TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
+{
+  ::setenv("AMENT_PREFIX_PATH", RANGE_NLM_ROS_DEVEL_PREFIX, 1); // where pluginlib finds the plugin
+  ros::param::set("/rnlm_depth/input", std::string("depth"));
+  ros::param::set("/rnlm_depth/temporal_radius", 1);
+  ros::param::set("/rnlm_depth/search_window", 7);
+  ros::param::set("/rnlm_depth/patch", 3);
+  ChildProcess manager({RANGE_NLM_NODELET_EXECUTABLE, "manager", "__name:=rnlm_manager"},
+                       g_master->directory() + "/rnlm_manager.log");
+  ChildProcess loader({RANGE_NLM_NODELET_EXECUTABLE, "load", "range_nlm/TemporalFilterNodelet", "rnlm_manager",
+                       "__name:=rnlm_depth", "depth/image:=/cam/depth/image", "depth/camera_info:=/cam/depth/info",
+                       "depth_filtered/image:=/cam/filtered/image", "depth_filtered/camera_info:=/cam/filtered/info"},
+                      g_master->directory() + "/rnlm_load.log");
+  ros::NodeHandle nh;
+  ros::Publisher images = nh.advertise<sensor_msgs::Image>("/cam/depth/image", 10);
+  ros::Publisher infos = nh.advertise<sensor_msgs::CameraInfo>("/cam/depth/info", 10, true);
+  Inbox<sensor_msgs::Image> output("/cam/filtered/image");
+  Inbox<sensor_msgs::CameraInfo> output_info("/cam/filtered/info");
+  ASSERT_TRUE(waitFor([&] {
+    return images.getNumSubscribers() > 0 && infos.getNumSubscribers() > 0 && output.publishers() > 0 &&
+           output_info.publishers() > 0;
+  })) << readLog(manager.log())
+      << readLog(loader.log());
+
+  // 16UC1 millimetres: the library's back-projection, stream and encoding.
+  const int w = 64, h = 48;
+  infos.publish(cameraInfo(w, h));
+  ros::Duration(0.3).sleep(); // the latched info reaches the nodelet before the first image
+  DepthIntrinsics intrinsics;
+  intrinsics.fx = intrinsics.fy = 300.0;
+  intrinsics.cx = (w - 1) / 2.0;
+  intrinsics.cy = (h - 1) / 2.0;
+  intrinsics.depth_scale = 1000.0;
+  TemporalStream<pcl::PointXYZ> stream16(1, TemporalWindow::causal, testParameters());
+  for (int k = 0; k < 3; ++k) {
+    const sensor_msgs::Image in = depth16(*frame(k), 200 + k);
+    images.publish(in);
+    if (k == 1) { // a colour image on the depth topic is dropped; the next depth image goes on
+      sensor_msgs::Image rgb = in;
+      rgb.encoding = "rgb8";
+      rgb.header.stamp.sec = 777;
+      images.publish(rgb);
+    }
+    const auto out = output.next();
+    ASSERT_TRUE(out) << readLog(manager.log());
+    const auto info = output_info.next();
+    ASSERT_TRUE(info);
+    EXPECT_EQ(out->header.stamp, in.header.stamp);
+    EXPECT_EQ(info->header.stamp, in.header.stamp);
+    EXPECT_EQ(out->encoding, "16UC1");
+    EXPECT_EQ(out->step, in.step);
+    DepthImage image;
+    image.width = w;
+    image.height = h;
+    image.values.resize(std::size_t(w) * h);
+    std::memcpy(image.values.data(), in.data.data(), in.data.size());
+    const auto ready = stream16.push(Cloud::Ptr(new Cloud(depthImageToCloud(image, intrinsics))));
+    ASSERT_EQ(ready.size(), 1u);
+    const DepthImage expected = cloudToDepthImage(*ready[0], 1000.0);
+    ASSERT_EQ(out->data.size(), expected.values.size() * 2);
+    EXPECT_EQ(std::memcmp(out->data.data(), expected.values.data(), out->data.size()), 0);
+    EXPECT_NE(std::memcmp(out->data.data(), in.data.data(), in.data.size()), 0); // it did filter
+  }
+  EXPECT_TRUE(waitFor([&] { return readLog(manager.log()).find(stampText(777, 0)) != std::string::npos; }));
+  EXPECT_NE(readLog(manager.log()).find("encoding 'rgb8' is not supported"), std::string::npos);
+
+  // 32FC1 metres of another size: a new window; x = (u - cx) z / fx, y = (v - cy) z / fy.
+  const int w2 = 40, h2 = 30;
+  infos.publish(cameraInfo(w2, h2));
+  ros::Duration(0.3).sleep();
+  TemporalStream<pcl::PointXYZ> stream32(1, TemporalWindow::causal, testParameters());
+  for (int k = 0; k < 2; ++k) {
+    const Cloud::Ptr source = frame(10 + k, w2, h2);
+    const sensor_msgs::Image in = depth32(*source, 300 + k);
+    images.publish(in);
+    const auto out = output.next();
+    ASSERT_TRUE(out) << readLog(manager.log());
+    EXPECT_EQ(out->encoding, "32FC1");
+    Cloud::Ptr cloud(new Cloud(w2, h2));
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int v = 0; v < h2; ++v)
+      for (int u = 0; u < w2; ++u) {
+        const float z = (*source)[v * w2 + u].z;
+        pcl::PointXYZ& p = (*cloud)[v * w2 + u];
+        if (!std::isfinite(z)) {
+          p = pcl::PointXYZ(nan, nan, nan);
+          continue;
+        }
+        p.x = float((u - (w2 - 1) / 2.0) * double(z) / 300.0);
+        p.y = float((v - (h2 - 1) / 2.0) * double(z) / 300.0);
+        p.z = z;
+      }
+    cloud->is_dense = false;
+    const auto ready = stream32.push(cloud);
+    ASSERT_EQ(ready.size(), 1u);
+    ASSERT_EQ(out->data.size(), std::size_t(w2) * h2 * 4);
+    for (std::size_t i = 0; i < ready[0]->size(); ++i) {
+      float z;
+      std::memcpy(&z, &out->data[i * 4], 4);
+      const float e = (*ready[0])[i].z;
+      ASSERT_TRUE(z == e || (std::isnan(z) && std::isnan(e))) << "pixel " << i << ": " << z << " vs " << e;
+    }
+  }
+  EXPECT_TRUE(manager.running()) << readLog(manager.log());
+}
+
+} // namespace
+
+int
+main(int argc, char** argv)
+{
+  ::testing::InitGoogleTest(&argc, argv);
+  ::testing::AddGlobalTestEnvironment(new RosEnvironment(argc, argv));
+  return RUN_ALL_TESTS();
+}
