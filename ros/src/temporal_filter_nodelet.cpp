@@ -62,6 +62,19 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
   readParameter(node, "iterations", p.iterations, "an integer");
   readParameter(node, "threads", p.threads, "an integer");
   readParameter(node, "normal_window", p.normal_window, "an integer");
+  readParameter(node, "dilation", p.dilation, "an integer");
+  std::string cross_frame;
+  if (readParameter(node, "cross_frame", cross_frame, "a string")) {
+    if (cross_frame == "guarded")
+      p.cross_frame_bandwidth = range_nlm::CrossFrameBandwidth::guarded;
+    else if (cross_frame == "temporal")
+      p.cross_frame_bandwidth = range_nlm::CrossFrameBandwidth::temporal;
+    else if (cross_frame == "spatial")
+      p.cross_frame_bandwidth = range_nlm::CrossFrameBandwidth::spatial;
+    else
+      throw std::invalid_argument("parameter ~cross_frame = '" + cross_frame +
+                                  "' is invalid: expected 'guarded', 'temporal' or 'spatial'");
+  }
   int seed = 42;
   if (readParameter(node, "seed", seed, "an integer") && seed < 0)
     throw std::invalid_argument("parameter ~seed must be >= 0, got " + std::to_string(seed));

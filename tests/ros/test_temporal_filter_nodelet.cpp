@@ -222,6 +222,9 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   ros::param::set("/rnlm_centred/causal", false);
   ros::param::set("/rnlm_centred/search_window", 7);
   ros::param::set("/rnlm_centred/patch", 3);
+  // The options added to the tool are parameters too: a dilation of 2 changes every output.
+  ros::param::set("/rnlm_centred/dilation", 2);
+  ros::param::set("/rnlm_centred/cross_frame", std::string("spatial"));
   ChildProcess node({nodeExecutable(), "__name:=rnlm_centred", "input:=/centred/in", "output:=/centred/out"},
                     g_master->directory() + "/rnlm_centred.log");
   ros::NodeHandle nh;
@@ -229,7 +232,10 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   Inbox<sensor_msgs::PointCloud2> output("/centred/out");
   ASSERT_TRUE(waitFor([&] { return input.getNumSubscribers() > 0 && output.publishers() > 0; }))
       << readLog(node.log());
-  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::centred, testParameters());
+  FilterParameters centred = testParameters();
+  centred.dilation = 2;
+  centred.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
+  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::centred, centred);
   std::vector<Cloud::Ptr> frames;
   for (int k = 0; k < 4; ++k) {
     frames.push_back(frame(k));
