@@ -303,8 +303,13 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   ros::param::set("/rnlm_depth/temporal_radius", 1);
   ros::param::set("/rnlm_depth/search_window", 7);
   ros::param::set("/rnlm_depth/patch", 3);
-  ChildProcess manager({RANGE_NLM_NODELET_EXECUTABLE, "manager", "__name:=rnlm_manager"},
-                       g_master->directory() + "/rnlm_manager.log");
+  std::vector<std::string> manager_command = {RANGE_NLM_NODELET_EXECUTABLE, "manager", "__name:=rnlm_manager"};
+#ifdef RANGE_NLM_ASAN_RUNTIME
+  // An AddressSanitizer build of the plugin loads only into a process whose first library is the
+  // ASan runtime; Debian's nodelet manager is not instrumented.
+  manager_command.insert(manager_command.begin(), {"env", "LD_PRELOAD=" RANGE_NLM_ASAN_RUNTIME});
+#endif
+  ChildProcess manager(manager_command, g_master->directory() + "/rnlm_manager.log");
   ChildProcess loader({RANGE_NLM_NODELET_EXECUTABLE, "load", "range_nlm/TemporalFilterNodelet", "rnlm_manager",
                        "__name:=rnlm_depth", "depth/image:=/cam/depth/image", "depth/camera_info:=/cam/depth/info",
                        "depth_filtered/image:=/cam/filtered/image", "depth_filtered/camera_info:=/cam/filtered/info"},
