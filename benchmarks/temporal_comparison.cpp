@@ -1,4 +1,7 @@
 #include "temporal_comparison.h"
+#include "bench_support.h"
+#include "librealsense_temporal.h"
+#include "quality_comparison.h"
 
 #include <range_nlm/nonlocal_means_filter.h>
 #include <range_nlm/eval/synthetic_scene.h>
@@ -8,9 +11,11 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <filesystem>
 #include <functional>
 #include <iomanip>
 #include <limits>
+#include <sstream>
 
 namespace range_nlm
 {
@@ -20,6 +25,97 @@ namespace temporal
 {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+namespace
+{
+/// The settings of librealsense's temporal filter compared: its defaults, and a heavier
+/// smoothing (alpha 0.1) that shows the price of a long memory.
+std::vector<librealsense::TemporalFilterParameters>
+librealsenseSettings()
+{
+  librealsense::TemporalFilterParameters heavy;
+  heavy.alpha = 0.1f;
+  return {librealsense::TemporalFilterParameters{}, heavy};
+}
+
+std::string
+librealsenseName(const librealsense::TemporalFilterParameters& p)
+{
+  std::ostringstream s;
+  s << "librealsense temporal (alpha " << p.alpha << ", delta " << p.delta << ", persistency " << p.persistence
+    << ")";
+  return s.str();
+}
+
+/// One filter over the whole sequence, frame after frame.
+std::vector<Cloud>
+librealsenseSequence(const std::vector<Cloud::ConstPtr>& frames, const librealsense::TemporalFilterParameters& p)
+{
+  librealsense::TemporalFilter filter(p);
+  std::vector<Cloud> out;
+  for (const auto& f : frames)
+    out.push_back(filter.filter(*f));
+  return out;
+}
+
+std::vector<Cloud>
+rangeNlmSequence(const std::vector<Cloud::ConstPtr>& frames, TemporalWindow window, const FilterParameters& p)
+{
+  std::vector<Cloud> out;
+  for (const auto& f : filterSequence<pcl::PointXYZ>(frames, 1, window, p))
+    out.push_back(*f);
+  return out;
+}
+
+std::vector<Cloud>
+perFrame(const std::vector<Cloud::ConstPtr>& frames, const FilterParameters& p)
+{
+  std::vector<Cloud> out;
+  for (const auto& f : frames) {
+    NonLocalMeansFilter<pcl::PointXYZ> filter;
+    filter.setParameters(p);
+    filter.setInputCloud(f);
+    out.emplace_back();
+    filter.filter(out.back());
+  }
+  return out;
+}
+
+const char*
+windowName(TemporalWindow w)
+{
+  switch (w) {
+  case TemporalWindow::centred: return "";
+  case TemporalWindow::causal: return ", causal";
+  case TemporalWindow::recursive: return ", recursive";
+  }
+  return "";
+}
+
+/// `frame` with the pixels outside `keep` set to NaN.
+Cloud
+masked(const Cloud& frame, const std::vector<unsigned char>& keep)
+{
+  Cloud out = frame;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (!keep[i])
+      out[i].x = out[i].y = out[i].z = nan;
+  out.is_dense = false;
+  return out;
+}
+
+std::string
+millimetres(double metres)
+{
+  std::ostringstream s;
+  if (std::isfinite(metres))
+    s << std::fixed << std::setprecision(2) << 1000.0 * metres;
+  else
+    s << "-";
+  return s.str();
+}
+} // namespace
 
 Cloud
 runningPixelFilter(const std::vector<Cloud::ConstPtr>& last, bool median)
@@ -125,38 +221,91 @@ run(const Options& options, std::ostream& log)
   parameters.threads = options.threads;
   {
     double ms = 0;
-    const auto results = timed(
-        [&] {
-          std::vector<Cloud> out;
-          for (const auto& f : noisy) {
-            NonLocalMeansFilter<pcl::PointXYZ> filter;
-            filter.setParameters(parameters);
-            filter.setInputCloud(f);
-            out.emplace_back();
-            filter.filter(out.back());
-          }
-          return out;
-        },
-        ms);
+    const auto results = timed([&] { return perFrame(noisy, parameters); }, ms);
     evaluate("range_nlm per frame (static)", results, ms);
   }
-  for (bool causal : {false, true}) {
+  for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::causal, TemporalWindow::recursive}) {
     double ms = 0;
-    const auto results = timed(
-        [&] {
-          std::vector<Cloud> out;
-          for (const auto& f : filterSequence<pcl::PointXYZ>(noisy, 1, causal, parameters))
-            out.push_back(*f);
-          return out;
-        },
-        ms);
-    evaluate(std::string("range_nlm temporal, radius 1") + (causal ? ", causal" : ""), results, ms);
+    const auto results = timed([&] { return rangeNlmSequence(noisy, window, parameters); }, ms);
+    evaluate(std::string("range_nlm temporal, radius 1") + windowName(window), results, ms);
+  }
+  for (const auto& p : librealsenseSettings()) {
+    double ms = 0;
+    const auto results = timed([&] { return librealsenseSequence(noisy, p); }, ms);
+    evaluate(librealsenseName(p), results, ms);
   }
   return rows;
 }
 
+std::vector<StaticSequenceResult>
+runStatic(const Options& options, std::ostream& log)
+{
+  std::vector<StaticSequenceResult> results;
+  FilterParameters parameters = FilterParameters::recommended();
+  parameters.threads = options.threads;
+  for (const std::vector<std::string>& sequence : options.static_sequences) {
+    if (sequence.size() < 2)
+      throw std::invalid_argument("a static sequence needs at least 2 frames, got " +
+                                  std::to_string(sequence.size()) +
+                                  (sequence.empty() ? std::string() : " (" + sequence.front() + ")"));
+    StaticSequenceResult result;
+    result.name = std::filesystem::path(sequence.front()).parent_path().filename().string();
+    result.frames = sequence;
+    std::vector<Cloud::ConstPtr> raw;
+    for (const std::string& f : sequence)
+      raw.emplace_back(new Cloud(bench::loadXyzFrame(f)));
+    std::vector<unsigned char> keep(raw.front()->size(), 1);
+    for (std::size_t k = 0; k < raw.size(); ++k) {
+      const Cloud& frame = *raw[k];
+      if (frame.width != raw.front()->width || frame.height != raw.front()->height)
+        throw std::invalid_argument("'" + sequence[k] + "' is " + std::to_string(frame.width) + " x " +
+                                    std::to_string(frame.height) + ", the sequence's first frame is " +
+                                    std::to_string(raw.front()->width) + " x " + std::to_string(raw.front()->height));
+      for (std::size_t i = 0; i < keep.size(); ++i) {
+        const pcl::PointXYZ& p = frame[i];
+        if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+          keep[i] = 0;
+      }
+    }
+    result.raw_pixels = std::size_t(std::count(keep.begin(), keep.end(), 1));
+    auto add = [&](const std::string& method, const std::vector<Cloud>& outputs) {
+      JitterEvaluator common, own;
+      for (const Cloud& c : outputs) {
+        common.add(masked(c, keep));
+        own.add(c);
+      }
+      result.rows.push_back(JitterRow{method, common.jitter(), own.jitter()});
+      log << result.name << ": " << method << ": median jitter " << millimetres(result.rows.back().common.median)
+          << " mm over the raw frames' valid pixels, " << millimetres(result.rows.back().own.median) << " mm over its own "
+          << result.rows.back().own.pixels << std::endl;
+    };
+    {
+      std::vector<Cloud> frames;
+      for (const auto& f : raw)
+        frames.push_back(*f);
+      add("raw", frames);
+    }
+    for (auto [sigma_s, sigma_r] : {std::pair<float, float>{5.0f, 0.03f}, {15.0f, 0.05f}}) {
+      std::vector<Cloud> frames;
+      for (const auto& f : raw)
+        frames.push_back(quality::fastBilateral(*f, sigma_s, sigma_r));
+      std::ostringstream name;
+      name << "FastBilateral per frame (sigma_s " << sigma_s << ", sigma_r " << sigma_r << ")";
+      add(name.str(), frames);
+    }
+    add("range_nlm per frame (default)", perFrame(raw, parameters));
+    for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::causal, TemporalWindow::recursive})
+      add(std::string("range_nlm temporal, radius 1") + windowName(window), rangeNlmSequence(raw, window, parameters));
+    for (const auto& p : librealsenseSettings())
+      add(librealsenseName(p), librealsenseSequence(raw, p));
+    results.push_back(std::move(result));
+  }
+  return results;
+}
+
 void
-printTable(const std::vector<Row>& rows, const Options& options, std::ostream& out)
+printTable(const std::vector<Row>& rows, const std::vector<StaticSequenceResult>& real, const Options& options,
+           std::ostream& out)
 {
   out << "\nSequence of " << options.frames << " frames " << options.width << "x" << options.height << ", "
       << options.noise << " noise, a box moving " << 1000 * options.motion_step
@@ -168,19 +317,60 @@ printTable(const std::vector<Row>& rows, const Options& options, std::ostream& o
     out << "| " << r.method << " | " << std::setprecision(2) << 1000 * r.metrics.temporal_std << " | "
         << 1000 * r.metrics.moving_edge_rmse << " | " << 1000 * r.metrics.total.flat_rmse << " | "
         << 1000 * r.metrics.total.feature_rmse << " | " << std::setprecision(0) << r.milliseconds_per_frame << " |\n";
+  if (real.empty())
+    return;
+  out << "\nStatic real sequences: median per-pixel range jitter (sample std over the frames, mm) of each "
+         "method's output for every frame of the sequence (the causal filters start cold on its first frame), "
+         "over the pixels valid in every raw frame; in brackets over the pixels valid in every output frame of "
+         "the method, and their number\n\n| method |";
+  for (const StaticSequenceResult& r : real)
+    out << " " << r.name << " (" << r.frames.size() << " frames, " << r.raw_pixels << " px) |";
+  out << "\n|---|";
+  for (std::size_t k = 0; k < real.size(); ++k)
+    out << "---|";
+  out << "\n";
+  for (std::size_t m = 0; m < real.front().rows.size(); ++m) {
+    out << "| " << real.front().rows[m].method << " |";
+    for (const StaticSequenceResult& r : real) {
+      const JitterRow& j = r.rows[m];
+      out << " " << millimetres(j.common.median) << " (" << millimetres(j.own.median) << ", " << j.own.pixels
+          << " px) |";
+    }
+    out << "\n";
+  }
 }
 
 void
-printJson(const std::vector<Row>& rows, std::ostream& out)
+printJson(const std::vector<Row>& rows, const std::vector<StaticSequenceResult>& real, std::ostream& out)
 {
   out << "{\"temporal\": [";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
-    out << (i ? ", " : "") << "{\"method\": \"" << r.method << "\", \"temporal_std_mm\": " << 1000 * r.metrics.temporal_std
-        << ", \"moving_edge_rmse_mm\": " << 1000 * r.metrics.moving_edge_rmse
-        << ", \"flat_rmse_mm\": " << 1000 * r.metrics.total.flat_rmse
-        << ", \"feature_rmse_mm\": " << 1000 * r.metrics.total.feature_rmse
-        << ", \"ms_per_frame\": " << r.milliseconds_per_frame << "}";
+    out << (i ? ", " : "") << "{\"method\": " << bench::jsonString(r.method)
+        << ", \"temporal_std_mm\": " << bench::jsonNumber(1000 * r.metrics.temporal_std)
+        << ", \"moving_edge_rmse_mm\": " << bench::jsonNumber(1000 * r.metrics.moving_edge_rmse)
+        << ", \"flat_rmse_mm\": " << bench::jsonNumber(1000 * r.metrics.total.flat_rmse)
+        << ", \"feature_rmse_mm\": " << bench::jsonNumber(1000 * r.metrics.total.feature_rmse)
+        << ", \"ms_per_frame\": " << bench::jsonNumber(r.milliseconds_per_frame) << "}";
+  }
+  out << "], \"real_static\": [";
+  for (std::size_t s = 0; s < real.size(); ++s) {
+    const StaticSequenceResult& r = real[s];
+    out << (s ? ", " : "") << "{\"sequence\": " << bench::jsonString(r.name) << ", \"frames\": [";
+    for (std::size_t k = 0; k < r.frames.size(); ++k)
+      out << (k ? ", " : "") << bench::jsonString(r.frames[k]);
+    out << "], \"raw_pixels\": " << r.raw_pixels << ", \"rows\": [";
+    for (std::size_t m = 0; m < r.rows.size(); ++m) {
+      const JitterRow& j = r.rows[m];
+      out << (m ? ", " : "") << "{\"method\": " << bench::jsonString(j.method)
+          << ", \"median_jitter_mm\": " << bench::jsonNumber(1000 * j.common.median)
+          << ", \"mean_jitter_mm\": " << bench::jsonNumber(1000 * j.common.mean)
+          << ", \"pixels\": " << j.common.pixels
+          << ", \"own_median_jitter_mm\": " << bench::jsonNumber(1000 * j.own.median)
+          << ", \"own_mean_jitter_mm\": " << bench::jsonNumber(1000 * j.own.mean)
+          << ", \"own_pixels\": " << j.own.pixels << "}";
+    }
+    out << "]}";
   }
   out << "]}\n";
 }
