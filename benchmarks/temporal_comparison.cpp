@@ -7,6 +7,8 @@
 #include <range_nlm/eval/synthetic_scene.h>
 #include <range_nlm/temporal_stream.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,14 +30,16 @@ using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 namespace
 {
-/// The settings of librealsense's temporal filter compared: its defaults, and a heavier
-/// smoothing (alpha 0.1) that shows the price of a long memory.
+/// The settings of librealsense's temporal filter compared: its defaults, a heavier smoothing
+/// (alpha 0.1) that shows the price of a long memory, and the widest edge threshold (delta 100
+/// units), which lets noise larger than the default 20 units be averaged.
 std::vector<librealsense::TemporalFilterParameters>
 librealsenseSettings()
 {
-  librealsense::TemporalFilterParameters heavy;
+  librealsense::TemporalFilterParameters heavy, wide;
   heavy.alpha = 0.1f;
-  return {librealsense::TemporalFilterParameters{}, heavy};
+  wide.delta = 100; // the option's maximum: above the noise of far pixels
+  return {librealsense::TemporalFilterParameters{}, heavy, wide};
 }
 
 std::string
@@ -103,6 +107,38 @@ masked(const Cloud& frame, const std::vector<unsigned char>& keep)
       out[i].x = out[i].y = out[i].z = nan;
   out.is_dense = false;
   return out;
+}
+
+/// `regions` with each plane refitted (orthogonal least squares) to the valid points of `frame`
+/// in the region; a region with fewer than 3 valid points keeps its plane.
+PlanarRegions
+refitPlanes(const PlanarRegions& regions, const Cloud& frame)
+{
+  const std::size_t n = regions.planes.size();
+  std::vector<Eigen::Vector3d> sum(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Matrix3d> outer(n, Eigen::Matrix3d::Zero());
+  std::vector<std::size_t> count(n, 0);
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const int id = regions.label[i];
+    const pcl::PointXYZ& p = frame[i];
+    if (id < 0 || !(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+      continue;
+    const Eigen::Vector3d q(p.x, p.y, p.z);
+    sum[std::size_t(id)] += q;
+    outer[std::size_t(id)] += q * q.transpose();
+    ++count[std::size_t(id)];
+  }
+  PlanarRegions refit = regions;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (count[k] < 3)
+      continue;
+    const Eigen::Vector3d centroid = sum[k] / double(count[k]);
+    const Eigen::Matrix3d covariance = outer[k] / double(count[k]) - centroid * centroid.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+    const Eigen::Vector3d normal = solver.eigenvectors().col(0); // smallest eigenvalue
+    refit.planes[k] = Eigen::Vector4d(normal.x(), normal.y(), normal.z(), -normal.dot(centroid));
+  }
+  return refit;
 }
 
 std::string
@@ -268,16 +304,22 @@ runStatic(const Options& options, std::ostream& log)
       }
     }
     result.raw_pixels = std::size_t(std::count(keep.begin(), keep.end(), 1));
+    const PlanarRegions regions = findPlanarRegions(*raw.back());
+    result.regions = regions.planes.size();
     auto add = [&](const std::string& method, const std::vector<Cloud>& outputs) {
       JitterEvaluator common, own;
       for (const Cloud& c : outputs) {
         common.add(masked(c, keep));
         own.add(c);
       }
-      result.rows.push_back(JitterRow{method, common.jitter(), own.jitter()});
-      log << result.name << ": " << method << ": median jitter " << millimetres(result.rows.back().common.median)
-          << " mm over the raw frames' valid pixels, " << millimetres(result.rows.back().own.median) << " mm over its own "
-          << result.rows.back().own.pixels << std::endl;
+      result.rows.push_back(JitterRow{method, common.jitter(), own.jitter(), planarResidual(regions, outputs.back()),
+                                      planarResidual(refitPlanes(regions, outputs.back()), outputs.back())});
+      const JitterRow& r = result.rows.back();
+      log << result.name << ": " << method << ": median jitter " << millimetres(r.common.median)
+          << " mm over the raw frames' valid pixels, " << millimetres(r.own.median) << " mm over its own " << r.own.pixels
+          << "; last frame to the raw planes " << millimetres(r.last_frame.interior_rms) << " / "
+          << millimetres(r.last_frame.border_rms) << " mm, to its own " << millimetres(r.last_frame_refit.interior_rms)
+          << " / " << millimetres(r.last_frame_refit.border_rms) << " mm" << std::endl;
     };
     {
       std::vector<Cloud> frames;
@@ -296,6 +338,14 @@ runStatic(const Options& options, std::ostream& log)
     add("range_nlm per frame (default)", perFrame(raw, parameters));
     for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::causal, TemporalWindow::recursive})
       add(std::string("range_nlm temporal, radius 1") + windowName(window), rangeNlmSequence(raw, window, parameters));
+    // A camera known to be static (range_nlm_denoise --cross-frame temporal): the cross-frame
+    // bandwidths always follow the frame-to-frame noise, where the guarded default takes
+    // pose5's low-frequency offsets between frames for motion.
+    FilterParameters static_camera = parameters;
+    static_camera.cross_frame_bandwidth = CrossFrameBandwidth::temporal;
+    for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::recursive})
+      add(std::string("range_nlm temporal, radius 1") + windowName(window) + ", cross-frame temporal",
+          rangeNlmSequence(raw, window, static_camera));
     for (const auto& p : librealsenseSettings())
       add(librealsenseName(p), librealsenseSequence(raw, p));
     results.push_back(std::move(result));
@@ -319,22 +369,26 @@ printTable(const std::vector<Row>& rows, const std::vector<StaticSequenceResult>
         << 1000 * r.metrics.total.feature_rmse << " | " << std::setprecision(0) << r.milliseconds_per_frame << " |\n";
   if (real.empty())
     return;
-  out << "\nStatic real sequences: median per-pixel range jitter (sample std over the frames, mm) of each "
-         "method's output for every frame of the sequence (the causal filters start cold on its first frame), "
-         "over the pixels valid in every raw frame; in brackets over the pixels valid in every output frame of "
-         "the method, and their number\n\n| method |";
+  out << "\nStatic real sequences. Jitter: median per-pixel range jitter (sample std over the frames, mm) of each "
+         "method's output for every frame of the sequence (the causal filters start cold on its first frame), over "
+         "the pixels valid in every raw frame; in brackets over the pixels valid in every output frame of the "
+         "method, and their number. Planes: the output for the last frame in the planar regions of the last raw "
+         "frame, RMS distance to the raw frame's planes and to planes refitted to the output in each region "
+         "(mm, interior of the regions)\n\n| method |";
   for (const StaticSequenceResult& r : real)
-    out << " " << r.name << " (" << r.frames.size() << " frames, " << r.raw_pixels << " px) |";
+    out << " " << r.name << " jitter (" << r.frames.size() << " frames, " << r.raw_pixels << " px) | " << r.name
+        << " planes: raw / refitted (" << r.regions << " regions) |";
   out << "\n|---|";
   for (std::size_t k = 0; k < real.size(); ++k)
-    out << "---|";
+    out << "---|---|";
   out << "\n";
   for (std::size_t m = 0; m < real.front().rows.size(); ++m) {
     out << "| " << real.front().rows[m].method << " |";
     for (const StaticSequenceResult& r : real) {
       const JitterRow& j = r.rows[m];
       out << " " << millimetres(j.common.median) << " (" << millimetres(j.own.median) << ", " << j.own.pixels
-          << " px) |";
+          << " px) | " << millimetres(j.last_frame.interior_rms) << " / " << millimetres(j.last_frame_refit.interior_rms)
+          << " |";
     }
     out << "\n";
   }
@@ -359,7 +413,7 @@ printJson(const std::vector<Row>& rows, const std::vector<StaticSequenceResult>&
     out << (s ? ", " : "") << "{\"sequence\": " << bench::jsonString(r.name) << ", \"frames\": [";
     for (std::size_t k = 0; k < r.frames.size(); ++k)
       out << (k ? ", " : "") << bench::jsonString(r.frames[k]);
-    out << "], \"raw_pixels\": " << r.raw_pixels << ", \"rows\": [";
+    out << "], \"raw_pixels\": " << r.raw_pixels << ", \"regions\": " << r.regions << ", \"rows\": [";
     for (std::size_t m = 0; m < r.rows.size(); ++m) {
       const JitterRow& j = r.rows[m];
       out << (m ? ", " : "") << "{\"method\": " << bench::jsonString(j.method)
@@ -368,7 +422,13 @@ printJson(const std::vector<Row>& rows, const std::vector<StaticSequenceResult>&
           << ", \"pixels\": " << j.common.pixels
           << ", \"own_median_jitter_mm\": " << bench::jsonNumber(1000 * j.own.median)
           << ", \"own_mean_jitter_mm\": " << bench::jsonNumber(1000 * j.own.mean)
-          << ", \"own_pixels\": " << j.own.pixels << "}";
+          << ", \"own_pixels\": " << j.own.pixels
+          << ", \"last_frame_planes_interior_rms_mm\": " << bench::jsonNumber(1000 * j.last_frame.interior_rms)
+          << ", \"last_frame_planes_border_rms_mm\": " << bench::jsonNumber(1000 * j.last_frame.border_rms)
+          << ", \"last_frame_points_lost\": " << j.last_frame.points_lost
+          << ", \"last_frame_refit_planes_interior_rms_mm\": " << bench::jsonNumber(1000 * j.last_frame_refit.interior_rms)
+          << ", \"last_frame_refit_planes_border_rms_mm\": " << bench::jsonNumber(1000 * j.last_frame_refit.border_rms)
+          << "}";
     }
     out << "]}";
   }

@@ -47,6 +47,12 @@ struct JitterRow
   TemporalJitter common;
   /// Over the pixels valid in every output frame of the method (holes it fills count).
   TemporalJitter own;
+  /// The method's output for the last frame within the last raw frame's planar regions, against
+  /// the raw frame's planes, and against planes refitted to the output in each region (the noise
+  /// left on a plane, whatever offset the frames averaged in give it): the jitter is steadiness
+  /// only (a filter that repeated its first output would have none).
+  PlanarResidual last_frame;
+  PlanarResidual last_frame_refit;
 };
 
 /// The jitter table of one static real sequence.
@@ -56,6 +62,8 @@ struct StaticSequenceResult
   std::vector<std::string> frames;
   /// Pixels valid in every raw frame.
   std::size_t raw_pixels = 0;
+  /// Planar regions found in the last raw frame.
+  std::size_t regions = 0;
   std::vector<JitterRow> rows;
 };
 
@@ -68,8 +76,10 @@ std::vector<Row>
 run(const Options& options, std::ostream& log);
 
 /// The jitter of each static real sequence of `options`: raw; FastBilateral and range_nlm frame
-/// by frame; range_nlm temporal (radius 1: centred, causal, recursive); librealsense's temporal
-/// filter (causal; its output for each frame of the sequence, starting cold on the first).
+/// by frame; range_nlm temporal (radius 1: centred, causal, recursive; centred and recursive
+/// with the cross-frame bandwidths of a static camera); librealsense's temporal filter (causal;
+/// its output for each frame of the sequence, starting cold on the first). Throws
+/// std::invalid_argument naming the file if a frame cannot be read or differs in size.
 std::vector<StaticSequenceResult>
 runStatic(const Options& options, std::ostream& log);
 
