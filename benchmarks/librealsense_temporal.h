@@ -37,8 +37,10 @@
 // setting alpha or the persistency mode).
 //
 // Deviations, none of which changes an output value of the Z16 path:
-//  - Only depth (Z16) frames; the source also filters disparity frames (float), the path the
-//    RealSense Viewer takes when its depth-to-disparity block precedes the temporal filter.
+//  - Only depth (Z16) frames, as a program gets that calls the filter on its depth frames. The
+//    source also filters disparity frames (float, no truncation): the path of the D400's
+//    recommended processing chain (src/ds/ds-device-common.cpp: depth-to-disparity, spatial,
+//    temporal, hole filling, back to depth), where delta is in disparity units.
 //  - Parameters are fixed per filter object. The source resets the state when alpha or the
 //    persistency mode is set; setting delta through its option does not (its callback locks a
 //    weak_ptr never assigned, so on_set_delta is not called, though the value is stored).
