@@ -33,8 +33,9 @@
 //   8 "Always on": always (once the pixel has had a value).
 //
 // State is reset (last values and histories to 0; the frame index, as in the source, is not)
-// when the frame size changes (the source: a new stream profile) and by reset() (the source:
-// setting alpha or the persistency mode).
+// when the frame size changes (the source: a new stream profile, which a restarted stream of the
+// same size also is) and by reset() (the source: setting alpha or the persistency mode; setting
+// alpha also restarts the frame index, which changes no output once the histories are zero).
 //
 // Deviations, none of which changes an output value of the Z16 path:
 //  - Only depth (Z16) frames, as a program gets that calls the filter on its depth frames. The
