@@ -1,5 +1,8 @@
 #include "bench_support.h"
 
+#include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/pcd_file.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -7,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -598,6 +602,22 @@ medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud)
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
       z.push_back(p.z);
   return z.empty() ? 0.0 : median(std::move(z));
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+loadXyzFrame(const std::string& path)
+{
+  namespace fs = std::filesystem;
+  DepthIntrinsics intrinsics;
+  const fs::path beside = fs::path(path).parent_path() / "intrinsics.txt";
+  const fs::path above = fs::path(path).parent_path().parent_path() / "intrinsics.txt";
+  if (io::isDepthImagePath(path)) {
+    if (fs::exists(beside))
+      intrinsics = readIntrinsics(beside.string());
+    else if (fs::exists(above))
+      intrinsics = readIntrinsics(above.string());
+  }
+  return io::xyzFromBlob(io::loadFrame(path, intrinsics), path);
 }
 
 } // namespace bench

@@ -124,6 +124,12 @@ medianPixelSpacing(const pcl::PointCloud<pcl::PointXYZ>& cloud);
 double
 medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud);
 
+/// A real frame as an organized XYZ cloud in metres: a PCD file, or a 16-bit depth PNG with the
+/// intrinsics.txt beside it or in its parent folder (the default intrinsics if neither exists).
+/// Throws std::invalid_argument naming the file if it cannot be read.
+pcl::PointCloud<pcl::PointXYZ>
+loadXyzFrame(const std::string& path);
+
 } // namespace bench
 } // namespace tools
 } // namespace range_nlm

@@ -1088,12 +1088,17 @@ runComparison(const po::variables_map& vm)
     t.threads = vm["threads"].as<int>();
     if (t.frames < 3)
       throw UsageError("--temporal-frames must be at least 3");
+    // The static real sequences (RealSense D435 triples) under data/ and --real-noise-data.
+    for (const std::string& dir : {std::string(RANGE_NLM_DATA_DIR), vm["real-noise-data"].as<std::string>()})
+      for (const auto& sequence : real_noise::staticRealSequences(dir))
+        t.static_sequences.push_back(sequence);
     const auto rows = temporal::run(t, log);
-    temporal::printJson(rows, json_text);
+    const auto real = temporal::runStatic(t, log);
+    temporal::printJson(rows, real, json_text);
     if (json)
-      temporal::printJson(rows, report);
+      temporal::printJson(rows, real, report);
     else
-      temporal::printTable(rows, t, report);
+      temporal::printTable(rows, real, t, report);
   }
   std::cout << report.str();
   if (vm.count("json-file")) {
@@ -1292,10 +1297,10 @@ run(int argc, char** argv)
     ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
     ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
     ("real-noise", "instead of timing: range_nlm's settings against grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares under realistic sensor noise: generated scenes with the stereo, kinect1, tof and kinect noise models (ground truth), the real frames in data/ (residual of their planar regions, interior and border band) and static real sequences (jitter)")
-    ("real-noise-data", po::value<std::string>()->default_value(""), "--real-noise: another folder laid out like data/ whose real frames are also used (e.g. one holding depth-images/realsense-d435-static/pose4 and pose5 for the jitter)")
+    ("real-noise-data", po::value<std::string>()->default_value(""), "--real-noise, --temporal-comparison: another folder laid out like data/ whose real frames are also used (e.g. one holding depth-images/realsense-d435-static/pose4 and pose5 for the jitter)")
     ("real-noise-renders", po::value<std::string>()->default_value(""), "--real-noise: write a flat-shaded image raw | range_nlm default | FastBilateral (sigma_s 5, sigma_r 0.03) of each real frame into this folder")
     ("real-noise-quick", "--real-noise: one noise level and seed per model, without MovingLeastSquares")
-    ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal, causal) and by a per-pixel running average / median; temporal jitter and error at the moving edges")
+    ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal: centred, causal, recursive), by a per-pixel running average / median and by librealsense's temporal filter (reimplemented); temporal jitter and error at the moving edges; and the jitter of the static RealSense D435 triples if found (see --real-noise-data)")
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on

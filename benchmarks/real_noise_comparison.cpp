@@ -1,4 +1,5 @@
 #include "real_noise_comparison.h"
+#include "bench_support.h"
 #include "quality_comparison.h"
 
 #include <range_nlm/core/pipeline.h>
@@ -99,21 +100,6 @@ mlsGrid()
   return s;
 }
 
-Cloud
-loadXyz(const std::string& path)
-{
-  DepthIntrinsics intrinsics;
-  const fs::path beside = fs::path(path).parent_path() / "intrinsics.txt";
-  const fs::path above = fs::path(path).parent_path().parent_path() / "intrinsics.txt";
-  if (io::isDepthImagePath(path)) {
-    if (fs::exists(beside))
-      intrinsics = readIntrinsics(beside.string());
-    else if (fs::exists(above))
-      intrinsics = readIntrinsics(above.string());
-  }
-  return io::xyzFromBlob(io::loadFrame(path, intrinsics), path);
-}
-
 std::string
 correlationText(const Cloud& c)
 {
@@ -161,6 +147,26 @@ variants()
   return v;
 }
 
+std::vector<std::vector<std::string>>
+staticRealSequences(const std::string& dir)
+{
+  std::vector<std::vector<std::string>> sequences;
+  if (dir.empty())
+    return sequences;
+  for (const auto& [pose, first] : {std::pair<std::string, int>{"pose4", 3}, {"pose5", 6}}) {
+    std::vector<std::string> seq;
+    for (int k = first; k < first + 3; ++k) {
+      const fs::path p =
+          fs::path(dir) / "depth-images/realsense-d435-static" / pose / (std::to_string(k) + "_realsense_depth.png");
+      if (fs::exists(p))
+        seq.push_back(p.string());
+    }
+    if (seq.size() == 3)
+      sequences.push_back(seq);
+  }
+  return sequences;
+}
+
 void
 addShippedFrames(Options& options, const std::string& data_dir, const std::string& extra_dir)
 {
@@ -187,19 +193,7 @@ addShippedFrames(Options& options, const std::string& data_dir, const std::strin
       unique.push_back(f);
   }
   options.real_frames = unique;
-  if (extra_dir.empty())
-    return;
-  for (const auto& [pose, first] : {std::pair<std::string, int>{"pose4", 3}, {"pose5", 6}}) {
-    std::vector<std::string> seq;
-    for (int k = first; k < first + 3; ++k) {
-      const fs::path p =
-          fs::path(extra_dir) / "depth-images/realsense-d435-static" / pose / (std::to_string(k) + "_realsense_depth.png");
-      if (fs::exists(p))
-        seq.push_back(p.string());
-    }
-    if (seq.size() == 3)
-      options.static_sequences.push_back(seq);
-  }
+  options.static_sequences = staticRealSequences(extra_dir);
 }
 
 void
@@ -303,7 +297,7 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
     report << "\n";
   }
   for (const std::string& path : options.real_frames) {
-    const Cloud raw = loadXyz(path);
+    const Cloud raw = bench::loadXyzFrame(path);
     log << path << ": " << correlationText(raw) << std::endl;
     const PlanarRegions regions = findPlanarRegions(raw);
     const PlanarResidual before = planarResidual(regions, raw);
@@ -354,7 +348,7 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
   for (const std::vector<std::string>& sequence : options.static_sequences) {
     std::vector<Cloud> raw;
     for (const std::string& f : sequence)
-      raw.push_back(loadXyz(f));
+      raw.push_back(bench::loadXyzFrame(f));
     const std::string name = fs::path(sequence.front()).parent_path().filename().string();
     log << sequence.front() << ": " << correlationText(raw.front()) << std::endl;
     const TemporalJitter before = temporalJitter(raw);

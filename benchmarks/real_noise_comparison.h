@@ -46,6 +46,12 @@ struct Options
 void
 addShippedFrames(Options& options, const std::string& data_dir, const std::string& extra_dir);
 
+/// The static real sequences under `dir` (laid out like data/): the RealSense D435 triples
+/// depth-images/realsense-d435-static/pose4/{3,4,5}_realsense_depth.png and pose5/{6,7,8}_...;
+/// a pose with a frame missing is skipped, an empty `dir` gives none.
+std::vector<std::vector<std::string>>
+staticRealSequences(const std::string& dir);
+
 /// The range_nlm settings compared: the default, the paper preset, the default without its
 /// dilated passes (contiguous windows) and with a third pass.
 std::vector<std::pair<std::string, FilterParameters>>
