@@ -350,18 +350,34 @@ TEST_F(ShardedRuns, ShardsShareTheOutputDirectoryButNotTheirFrames)
       args.push_back(word);
     return test::startProcess(args, (root_ / log).string());
   };
-  // All four shards at once, and while they run (held still with SIGSTOP once one has written
-  // a frame, so that none can end first): the same shard again, a shard of another count
-  // overlapping them, and a run over the whole recording are refused.
+  // All four shards at once, and while they run (each held still with SIGSTOP as soon as it has
+  // written its first frame, so that it holds its frames and cannot end first, however slowly
+  // the others start): the same shard again, a shard of another count overlapping them, and a
+  // run over the whole recording are refused.
   std::vector<pid_t> shards;
   for (int k = 0; k < 4; ++k)
     shards.push_back(start(std::to_string(k) + "/4", "shard" + std::to_string(k) + ".txt"));
+  std::vector<bool> held(4, false);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(2);
-  while (std::chrono::steady_clock::now() < deadline && frameFiles(out).empty())
+  while (std::chrono::steady_clock::now() < deadline && std::count(held.begin(), held.end(), true) < 4) {
+    const std::vector<std::string> names = frameFiles(out);
+    for (int k = 0; k < 4; ++k)
+      for (int f = 10 * k; f < 10 * k + 10 && !held[k]; ++f) {
+        char name[32];
+        std::snprintf(name, sizeof name, "scan_%03d.pcd", f);
+        if (std::binary_search(names.begin(), names.end(), std::string(name))) {
+          ::kill(shards[k], SIGSTOP);
+          held[k] = true;
+        }
+      }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  for (pid_t pid : shards)
-    ::kill(pid, SIGSTOP);
+  }
+  for (int k = 0; k < 4; ++k)
+    if (!held[k])
+      ::kill(shards[k], SIGSTOP);
   const std::size_t written = frameFiles(out).size();
+  for (int k = 0; k < 4; ++k)
+    EXPECT_TRUE(held[k]) << "shard " << k << "/4 wrote no frame within two minutes";
   const test::CommandResult again = test::runCommand(kTool + " " + options + " --output-dir " + out.string() + " --shard 2/4");
   const test::CommandResult overlapping =
       test::runCommand(kTool + " " + options + " --output-dir " + out.string() + " --shard 0/2 --resume");
