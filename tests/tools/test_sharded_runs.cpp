@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <csignal>
+#include <fcntl.h>
 #include <map>
 #include <string>
 #include <sys/wait.h>
@@ -63,6 +64,24 @@ frameFiles(const fs::path& dir)
         names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
+}
+
+/// True if a run holds frames [first, first + count) of the output directory `dir` (the byte
+/// range of its lock file that range_nlm_denoise --shard locks).
+bool
+framesHeld(const fs::path& dir, std::size_t first, std::size_t count)
+{
+  const int fd = ::open((dir / ".range_nlm_denoise.lock").c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    return false;
+  struct flock probe = {};
+  probe.l_type = F_WRLCK;
+  probe.l_whence = SEEK_SET;
+  probe.l_start = static_cast<off_t>(first);
+  probe.l_len = static_cast<off_t>(count);
+  const bool held = ::fcntl(fd, F_OFD_GETLK, &probe) == 0 && probe.l_type != F_UNLCK;
+  ::close(fd);
+  return held;
 }
 
 std::vector<std::string>
@@ -350,14 +369,21 @@ TEST_F(ShardedRuns, ShardsShareTheOutputDirectoryButNotTheirFrames)
       args.push_back(word);
     return test::startProcess(args, (root_ / log).string());
   };
-  // All four shards at once, and while they run (held still with SIGSTOP once one has written
-  // a frame, so that none can end first): the same shard again, a shard of another count
-  // overlapping them, and a run over the whole recording are refused.
+  // All four shards at once, and while they run (held still with SIGSTOP once every one holds
+  // its frames and one has written a frame, so that none can end first): the same shard again,
+  // a shard of another count overlapping them, and a run over the whole recording are refused.
+  // (On a loaded machine a shard can still be starting when another has written a frame.)
   std::vector<pid_t> shards;
   for (int k = 0; k < 4; ++k)
     shards.push_back(start(std::to_string(k) + "/4", "shard" + std::to_string(k) + ".txt"));
+  auto allHeld = [&] {
+    for (std::size_t k = 0; k < 4; ++k)
+      if (!framesHeld(out, 10 * k, 10))
+        return false;
+    return true;
+  };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(2);
-  while (std::chrono::steady_clock::now() < deadline && frameFiles(out).empty())
+  while (std::chrono::steady_clock::now() < deadline && (frameFiles(out).empty() || !allHeld()))
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   for (pid_t pid : shards)
     ::kill(pid, SIGSTOP);
