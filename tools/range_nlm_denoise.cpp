@@ -1,6 +1,7 @@
 // range_nlm_denoise: filters one organized PCD frame, or every frame of a directory (optionally
 // with the temporal filter, in one or several passes), keeping every field of the input.
 #include "cli/cli.h"
+#include "cli/pipeline.h"
 #include "cli/shard.h"
 
 #include <range_nlm/eval/render.h>
@@ -19,6 +20,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <exception>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -560,13 +562,19 @@ addOptions(po::options_description& options)
 /// the filter's buffers (about 106 bytes a pixel) and 2R + 1 frames in flight, each held as the
 /// loaded points, a PointXYZ cloud and the filter's grid (point_step + 44 bytes a pixel).
 /// Measured with /usr/bin/time -v on 640 x 480 frames of 16-byte points: 166 bytes a pixel
-/// above the tool's baseline for one static pass, 282 with --temporal-radius 1.
+/// above the tool's baseline for one static pass, 282 with --temporal-radius 1. A directory run
+/// (`overlapped`) also holds the frame read ahead and the one written behind, each as its loaded
+/// points and a PointXYZ cloud (point_step + 16 bytes a pixel; measured: 47 bytes a pixel more
+/// than one frame at a time, static or temporal).
 std::uint64_t
-frameMemory(const std::vector<Pass>& passes, std::uint64_t width, std::uint64_t height, std::uint64_t point_step)
+frameMemory(const std::vector<Pass>& passes, bool overlapped, std::uint64_t width, std::uint64_t height,
+            std::uint64_t point_step)
 {
   std::uint64_t per_pixel = 0;
   for (const Pass& pass : passes)
     per_pixel += 106 + (2 * std::uint64_t(pass.radius) + 1) * (point_step + 44);
+  if (overlapped)
+    per_pixel += 2 * (point_step + 16);
   const std::uint64_t pixels = width * height;
   return pixels > UINT64_MAX / per_pixel ? UINT64_MAX : pixels * per_pixel;
 }
@@ -669,8 +677,9 @@ jobFrom(const po::variables_map& vm)
     throw UsageError("--resume cannot be used when the output is the input (every frame would count as finished)");
   job.intrinsics = depthIntrinsicsFrom(vm);
   const std::vector<Pass> passes = job.passes;
-  job.budget = memoryBudgetFrom(vm, [passes](std::uint64_t w, std::uint64_t h, std::uint64_t step) {
-    return frameMemory(passes, w, h, step);
+  const bool overlapped = !job.single; // one frame read ahead, one written behind (FrameRun)
+  job.budget = memoryBudgetFrom(vm, [passes, overlapped](std::uint64_t w, std::uint64_t h, std::uint64_t step) {
+    return frameMemory(passes, overlapped, w, h, step);
   });
   job.output = outputOptionsFrom(vm, job.single, job.inputs.front(), job.single ? job.outputs.front() : std::string(),
                                  job.intrinsics);
@@ -691,8 +700,24 @@ struct Summary
   double wall_ms = 0.0;
 };
 
+/// A frame as the reader thread prepares it: the file, and its points as the filter takes them.
+struct ReadFrame
+{
+  LoadedCloud loaded;
+  Cloud::Ptr xyz;
+  /// What converting the points threw (an infinite coordinate): thrown after the frame's size is
+  /// checked, so that a frame of the wrong size is reported as such, as when read in turn.
+  std::exception_ptr xyz_error;
+};
+
 /// Reads, filters and writes the frames of a job in order, with reading one frame ahead of the
-/// temporal windows as they need it.
+/// temporal windows as they need it. Reading and writing overlap with filtering: a reader thread
+/// reads the next frame while the current one is filtered, and a writer thread writes the
+/// previous result meanwhile (one frame in flight on each side). Everything the writer does --
+/// writing, per-frame lines, warnings, the summary's records -- runs as tasks in frame order, and
+/// a failure on either side reaches this thread in the order the frames would have met it when
+/// read, filtered and written one after another, so the output, the messages and the exit
+/// status are those of that sequential run.
 class FrameRun
 {
 public:
@@ -721,6 +746,38 @@ public:
     for (const FrameRange& read : job_.plan.reads)
       history_begin.push_back(read.begin >= reads_.begin ? read.begin - reads_.begin : 0);
     PassChain chain(job_.passes, wanted_, history_begin, &progress_);
+    std::vector<std::size_t> read_order; // the frames loaded, in order
+    for (std::size_t f = reads_.begin; f < reads_.end; ++f)
+      if (chain.inputRead(f - reads_.begin))
+        read_order.push_back(f);
+    WriteBehind writer;
+    ReadAhead<ReadFrame> reader(read_order.size(), [&](std::size_t i) { return readFrame(read_order[i]); });
+    writer_ = &writer;
+    try {
+      filterAll(chain, reader);
+      writer.drain();
+    } catch (...) {
+      // Every frame before the failure is written first. A failure to write one of them came
+      // first in frame order, so it is the one reported.
+      std::exception_ptr error = std::current_exception();
+      try {
+        writer.drain();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      progress_.finish();
+      std::rethrow_exception(error);
+    }
+    progress_.finish();
+    summary_.wall_ms = millisecondsSince(start);
+    return summary_;
+  }
+
+private:
+  /// The frames of the run through the chain, their results handed to the writer.
+  void filterAll(PassChain& chain, ReadAhead<ReadFrame>& reader)
+  {
+    const FrameRange& writes = job_.plan.writes;
     std::size_t deferred = 0; // unreadable frames before the sequence's size is known
     for (std::size_t f = reads_.begin; f < reads_.end; ++f) {
       const bool halo = !writes.contains(f);
@@ -731,12 +788,16 @@ public:
       }
       PendingFrame frame{LoadedCloud(), job_.inputs[f], job_.outputs[f], "", !wanted_[f - reads_.begin], halo};
       Cloud::Ptr xyz;
+      bool loaded = false;
       try {
         try {
-          frame.loaded = loadFrame(job_.inputs[f], job_.intrinsics, job_.budget);
-          intrinsics_warning_.frameRead(job_.inputs[f]);
+          ReadFrame read = reader.next(); // frame f; throws what loading it threw
+          frame.loaded = std::move(read.loaded);
+          loaded = true;
           checkSize(frame.loaded, job_.inputs[f]);
-          xyz.reset(new Cloud(xyzFromBlob(frame.loaded, job_.inputs[f])));
+          if (read.xyz_error)
+            std::rethrow_exception(read.xyz_error);
+          xyz = std::move(read.xyz);
         } catch (const std::bad_alloc&) {
           frame.loaded = LoadedCloud();
           throw InputError("'" + job_.inputs[f] +
@@ -744,13 +805,16 @@ public:
                            "up front, or free memory)");
         }
       } catch (const InputError& e) {
-        if (!job_.keep_going) {
-          // Every frame already out is written; frames whose window reaches this one are not, so
-          // that --resume after mending it gives exactly the result of a clean run.
-          progress_.finish();
+        // Without --keep-going: every frame already out is written (run() waits for the writer);
+        // frames whose window reaches this one are not, so that --resume after mending it gives
+        // exactly the result of a clean run.
+        if (!job_.keep_going)
           throw;
-        }
         frame.unreadable = e.what(); // listed at the end
+      }
+      if (loaded) { // before anything of this frame or a later one is reported
+        const std::string path = job_.inputs[f];
+        writer_->post([this, path] { intrinsics_warning_.frameRead(path); }, false);
       }
       if (!frame.unreadable.empty() && summary_.width == 0) {
         pending_.push_back(std::move(frame)); // its stand-in needs the sequence's size
@@ -766,17 +830,28 @@ public:
       finish(filtered([&] { return chain.push(xyz); }));
     }
     for (; deferred > 0; --deferred) { // nothing could be read at all
-      if (!pending_.front().halo)
-        summary_.unreadable.emplace_back(fileName(pending_.front().input_path), pending_.front().unreadable);
+      if (!pending_.front().halo) {
+        auto record = std::make_pair(fileName(pending_.front().input_path), pending_.front().unreadable);
+        writer_->post([this, record] { summary_.unreadable.push_back(record); }, false);
+      }
       pending_.pop_front();
     }
     finish(filtered([&] { return chain.flush(); }));
-    progress_.finish();
-    summary_.wall_ms = millisecondsSince(start);
-    return summary_;
   }
 
-private:
+  /// Loads frame f (on the reader thread): what the filter needs of it, or the exception.
+  ReadFrame readFrame(std::size_t f) const
+  {
+    ReadFrame read;
+    read.loaded = loadFrame(job_.inputs[f], job_.intrinsics, job_.budget);
+    try {
+      read.xyz.reset(new Cloud(xyzFromBlob(read.loaded, job_.inputs[f])));
+    } catch (...) {
+      read.xyz_error = std::current_exception();
+    }
+    return read;
+  }
+
   static int iterationsPerFrame(const std::vector<Pass>& passes)
   {
     int n = 0;
@@ -793,10 +868,8 @@ private:
     try {
       return step();
     } catch (const std::invalid_argument& e) {
-      progress_.finish();
       throw InputError("'" + pending_.front().input_path + "': " + e.what());
     } catch (const std::bad_alloc&) {
-      progress_.finish();
       throw InputError("'" + pending_.front().input_path + "': out of memory while filtering the frame (" +
                        std::to_string(summary_.width) + " x " + std::to_string(summary_.height) +
                        "; lower --memory-limit to refuse such frames up front, or free memory)");
@@ -843,48 +916,72 @@ private:
     return cloud;
   }
 
+  /// Hands the results that came out of the chain, in order, to the writer: each is written (or
+  /// recorded as skipped or unreadable) and reported there.
   void finish(const std::vector<ChainOutput>& results)
   {
     for (const ChainOutput& result : results) {
-      PendingFrame frame = std::move(pending_.front());
+      auto frame = std::make_shared<PendingFrame>(std::move(pending_.front()));
       pending_.pop_front();
-      const std::string name = fileName(frame.output_path);
-      if (frame.halo)
+      if (frame->halo)
         continue; // another shard's frame
-      if (!frame.unreadable.empty()) {
-        summary_.unreadable.emplace_back(fileName(frame.input_path), frame.unreadable);
-      } else if (!result.cloud || frame.finished) { // --resume: finished before
-        ++summary_.skipped;
-        if (!job_.quiet && !job_.json)
-          std::cout << name << ": skipped (complete output exists)" << std::endl;
+      if (!frame->unreadable.empty()) {
+        auto record = std::make_pair(fileName(frame->input_path), frame->unreadable);
+        writer_->post(
+            [this, record] {
+              summary_.unreadable.push_back(record);
+              reportProgress();
+            },
+            false);
+      } else if (!result.cloud || frame->finished) { // --resume: finished before
+        const std::string name = fileName(frame->output_path);
+        writer_->post(
+            [this, name] {
+              ++summary_.skipped;
+              if (!job_.quiet && !job_.json)
+                std::cout << name << ": skipped (complete output exists)" << std::endl;
+              reportProgress();
+            },
+            false);
       } else {
-        try {
-          writeResult(frame, *result.cloud, job_.output);
-        } catch (const std::bad_alloc&) {
-          throw InputError("'" + frame.output_path + "': out of memory while writing the frame");
-        }
-        FrameReport report{name, result.info.milliseconds, result.info.bandwidths, result.info.problem};
-        if (!job_.quiet && !job_.json) {
-          if (report.unfiltered.empty())
-            std::cout << name << ": " << std::fixed << std::setprecision(1) << report.milliseconds << " ms, d = "
-                      << std::setprecision(6) << report.bandwidths.distance << ", s = " << report.bandwidths.similarity
-                      << std::endl;
-          else
-            std::cout << name << ": not filtered, written unchanged (" << report.unfiltered << ")" << std::endl;
-        }
-        summary_.written.push_back(report);
+        writer_->post([this, frame, result] { write(*frame, result); }, true);
       }
-      progress_.update(summary_.written.size() + summary_.skipped + summary_.unreadable.size());
     }
   }
+
+  /// On the writer thread: writes one result and reports it.
+  void write(PendingFrame& frame, const ChainOutput& result)
+  {
+    try {
+      writeResult(frame, *result.cloud, job_.output);
+    } catch (const std::bad_alloc&) {
+      throw InputError("'" + frame.output_path + "': out of memory while writing the frame");
+    }
+    const std::string name = fileName(frame.output_path);
+    FrameReport report{name, result.info.milliseconds, result.info.bandwidths, result.info.problem};
+    if (!job_.quiet && !job_.json) {
+      if (report.unfiltered.empty())
+        std::cout << name << ": " << std::fixed << std::setprecision(1) << report.milliseconds << " ms, d = "
+                  << std::setprecision(6) << report.bandwidths.distance << ", s = " << report.bandwidths.similarity
+                  << std::endl;
+      else
+        std::cout << name << ": not filtered, written unchanged (" << report.unfiltered << ")" << std::endl;
+    }
+    summary_.written.push_back(report);
+    reportProgress();
+  }
+
+  void reportProgress() { progress_.update(summary_.written.size() + summary_.skipped + summary_.unreadable.size()); }
 
   const Job& job_;
   FrameRange reads_;
   DefaultIntrinsicsWarning intrinsics_warning_;
   std::vector<bool> wanted_;
   Progress progress_;
-  std::deque<PendingFrame> pending_;
+  std::deque<PendingFrame> pending_; // pushed into the chain, not yet out of it
+  /// Written on the writer thread (width and height on this one); read when the writer is done.
   Summary summary_;
+  WriteBehind* writer_ = nullptr; // during run()
 };
 
 /// What a shard writes and reads, for the first line of its output.

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iostream>
 #include <csignal>
+#include <fcntl.h>
 #include <map>
 #include <string>
 #include <sys/wait.h>
@@ -63,6 +64,24 @@ frameFiles(const fs::path& dir)
         names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
+}
+
+/// True if a run holds frames [first, first + count) of the output directory `dir` (the byte
+/// range of its lock file that range_nlm_denoise --shard locks).
+bool
+framesHeld(const fs::path& dir, std::size_t first, std::size_t count)
+{
+  const int fd = ::open((dir / ".range_nlm_denoise.lock").c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    return false;
+  struct flock probe = {};
+  probe.l_type = F_WRLCK;
+  probe.l_whence = SEEK_SET;
+  probe.l_start = static_cast<off_t>(first);
+  probe.l_len = static_cast<off_t>(count);
+  const bool held = ::fcntl(fd, F_OFD_GETLK, &probe) == 0 && probe.l_type != F_UNLCK;
+  ::close(fd);
+  return held;
 }
 
 std::vector<std::string>
@@ -377,7 +396,8 @@ TEST_F(ShardedRuns, ShardsShareTheOutputDirectoryButNotTheirFrames)
       ::kill(shards[k], SIGSTOP);
   const std::size_t written = frameFiles(out).size();
   for (int k = 0; k < 4; ++k)
-    EXPECT_TRUE(held[k]) << "shard " << k << "/4 wrote no frame within two minutes";
+    EXPECT_TRUE(held[k] && framesHeld(out, 10 * k, 10))
+        << "shard " << k << "/4 wrote no frame within two minutes, or does not hold its frames";
   const test::CommandResult again = test::runCommand(kTool + " " + options + " --output-dir " + out.string() + " --shard 2/4");
   const test::CommandResult overlapping =
       test::runCommand(kTool + " " + options + " --output-dir " + out.string() + " --shard 0/2 --resume");
