@@ -188,6 +188,8 @@ const char*
 toString(Stage stage)
 {
   switch (stage) {
+  case Stage::dilation:
+    return "dilation";
   case Stage::neighbour_frames:
     return "neighbour frames";
   case Stage::bandwidths:
@@ -311,7 +313,9 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   const Grid& input = *frames[center];
   const bool empty = input.countValid() == 0;
   int k = parameters.dilation;
+  StageTracker split(workspace.observer, 0);
   if (k == 0) {
+    split.start(Stage::dilation);
     // Automatic: contiguous windows unless every phase still holds the windows, and nothing to
     // estimate in a frame without a valid point (runContiguous says so).
     const int needed = std::max({parameters.search_window, parameters.patch_size, parameters.normal_window,
@@ -321,9 +325,11 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       k = 1;
   }
   if (k <= 1 || empty) {
+    split.stop();
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
+  split.start(Stage::dilation);
   // The dilated passes: each phase (u mod k, v mod k) of the frames is a grid of its own whose
   // neighbours are k pixels apart, filtered with contiguous windows.
   FilterParameters coarse = parameters;
@@ -340,6 +346,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
       for (std::size_t f = 0; f < frames.size(); ++f) {
         if (!frames[f] || frames[f]->width != input.width || frames[f]->height != input.height) {
+          split.stop();
           runContiguous(frames, center, parameters, viewpoint, active, workspace); // reports the size error
           return;
         }
@@ -348,11 +355,14 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       }
       if (!active.empty())
         subsample(active, input.width, input.height, k, u0, v0, sub_active);
+      split.stop();
       try {
         runContiguous(sub_frames, center, coarse, viewpoint, sub_active, phase);
       } catch (const UnfilterableFrame&) {
+        split.start(Stage::dilation);
         continue; // this phase keeps its points
       }
+      split.start(Stage::dilation);
       const Grid& out = phase.run.output;
       for (int b = 0; b < out.height; ++b)
         for (int a = 0; a < out.width; ++a) {
@@ -363,6 +373,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
           result.z[to] = out.z[from];
         }
     }
+  split.stop();
   if (parameters.iterations <= 1) {
     workspace.run.output = std::move(result);
     workspace.run.bandwidths = phase.run.bandwidths;

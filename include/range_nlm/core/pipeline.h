@@ -193,10 +193,14 @@ FilterRun
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active);
 
-/// The phases of runFilter. neighbour_frames runs once per call, the others once per iteration,
-/// in this order.
+/// The phases of runFilter. dilation and neighbour_frames run once per call, the others once per
+/// iteration, in this order. With a dilation k > 1 the phases of every pass are reported: each of
+/// the k^2 dilated passes (on frames of 1/k^2 the points) reports its own, iteration 0.
 enum class Stage
 {
+  /// Dilated passes (FilterParameters::dilation): the automatic dilation's noise correlation
+  /// estimate, the split of the frames into their k^2 phases and the merge of the results.
+  dilation,
   /// Bandwidths (or noise profiles) of the temporal neighbour frames.
   neighbour_frames,
   /// The current frame's noise profile (range-adaptive model) or bandwidths (global model).
@@ -215,7 +219,7 @@ enum class Stage
   displacement
 };
 /// Number of Stage values.
-constexpr int kStageCount = 8;
+constexpr int kStageCount = 9;
 /// A short name of the stage ("normals", "offsets", ...).
 const char*
 toString(Stage stage);
