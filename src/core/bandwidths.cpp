@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -151,6 +152,56 @@ medianOf(std::vector<float> v)
   return v[mid];
 }
 } // namespace
+
+void
+detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                           std::size_t n)
+{
+  if (xs.empty()) {
+    std::fill(out, out + n, 0.0f);
+    return;
+  }
+  // interpolate() for a block of points at a time, branch-free so that it vectorizes: the bin
+  // [xs[lo], xs[lo + 1]] of x is found by a scan over the (strictly increasing) ranges instead of
+  // a binary search per point, and the same arithmetic follows.
+  const std::size_t bins = xs.size();
+  const float front = xs.front(), back = xs.back(), first = ys.front(), last = ys.back();
+  constexpr std::size_t kBlock = 256;
+  // The bin's ends as bits, chosen with masks (GCC turns a select into a branch here).
+  std::uint32_t xl[kBlock], yl[kBlock], xh[kBlock], yh[kBlock];
+  const auto bits = [](float f) { return __builtin_bit_cast(std::uint32_t, f); };
+  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+    const int m = static_cast<int>(std::min(kBlock, n - i0));
+    const float* __restrict xv = x + i0;
+    float* __restrict o = out + i0;
+    if (bins == 1) {
+      for (int i = 0; i < m; ++i)
+        o[i] = first;
+      continue;
+    }
+    for (int i = 0; i < m; ++i)
+      xl[i] = bits(xs[0]), yl[i] = bits(ys[0]), xh[i] = bits(xs[1]), yh[i] = bits(ys[1]);
+    for (std::size_t b = 1; b + 1 < bins; ++b) {
+      const float xb = xs[b];
+      const std::uint32_t bxb = bits(xb), byb = bits(ys[b]), bxn = bits(xs[b + 1]), byn = bits(ys[b + 1]);
+      for (int i = 0; i < m; ++i) {
+        const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
+        xl[i] = (bxb & past) | (xl[i] & ~past);
+        yl[i] = (byb & past) | (yl[i] & ~past);
+        xh[i] = (bxn & past) | (xh[i] & ~past);
+        yh[i] = (byn & past) | (yh[i] & ~past);
+      }
+    }
+    for (int i = 0; i < m; ++i) {
+      const float lx = __builtin_bit_cast(float, xl[i]), ly = __builtin_bit_cast(float, yl[i]);
+      const float hx = __builtin_bit_cast(float, xh[i]), hy = __builtin_bit_cast(float, yh[i]);
+      const float gap = hx - lx;
+      const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
+      const float mid = ly + t * (hy - ly);
+      o[i] = xv[i] <= front ? first : (xv[i] >= back ? last : mid);
+    }
+  }
+}
 
 float
 NoiseProfile::sigmaAt(float rho) const

@@ -32,6 +32,11 @@ void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
                const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>* planes);
+/// The piecewise linear interpolation of NoiseProfile::sigmaAt / extentAt (ranges xs, values ys)
+/// at the n points x into out, with the same result for every point, vectorized.
+void
+interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                   std::size_t n);
 /// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
 void
 copyGrid(const Grid& from, Grid& to, int threads);

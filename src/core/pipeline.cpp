@@ -437,15 +437,25 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     detail::copyGrid(input, run.output, threads);
 
   // Range of every centre point (the per-point bandwidths are functions of it).
-  auto rangesOf = [&](const Grid& g) {
-    std::vector<float> rho(g.size(), 0.0f);
+  auto rangesInto = [&](const Grid& g, std::vector<float>& rho) {
+    rho.resize(g.size());
     const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(g.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < size; ++i)
-      if (g.valid[i]) {
-        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
-        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
-      }
+    const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+    const float* __restrict x = g.x.data();
+    const float* __restrict y = g.y.data();
+    const float* __restrict z = g.z.data();
+    const unsigned char* __restrict valid = g.valid.data();
+    float* __restrict out = rho.data();
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+    for (std::ptrdiff_t i = 0; i < size; ++i) {
+      const float dx = x[i] - vx, dy = y[i] - vy, dz = z[i] - vz;
+      const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      out[i] = valid[i] ? r : 0.0f;
+    }
+  };
+  auto rangesOf = [&](const Grid& g) {
+    std::vector<float> rho;
+    rangesInto(g, rho);
     return rho;
   };
   auto medianRange = [&](const Grid& g, const std::vector<float>& rho) {
@@ -500,14 +510,26 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 
   std::vector<float>& offsets = workspace.offsets;
   NormalField& normals = workspace.normals;
-  std::vector<std::vector<float>> inverse_d2(count), inverse_s2(count);
+  std::vector<std::vector<float>>& inverse_d2 = workspace.inverse_d2;
+  std::vector<std::vector<float>>& inverse_s2 = workspace.inverse_s2;
+  if (inverse_d2.size() < static_cast<std::size_t>(count))
+    inverse_d2.resize(count), inverse_s2.resize(count);
+  // profile.sigmaAt / extentAt of every point's range into `out`, in blocks by `threads` threads.
+  auto profileMap = [&](const std::vector<float>& xs, const std::vector<float>& ys, const std::vector<float>& rho,
+                        std::vector<float>& out) {
+    out.resize(n);
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n), block = 4096;
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::ptrdiff_t lo = 0; lo < size; lo += block)
+      detail::interpolateProfile(xs, ys, &rho[lo], &out[lo], static_cast<std::size_t>(std::min(block, size - lo)));
+  };
   for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
     const Grid& current = run.output;
     StageTracker stage(observer, iteration);
-    std::vector<float> rho;
+    std::vector<float>& rho = workspace.ranges;
     if (adaptive) {
       stage.start(Stage::bandwidths);
-      rho = rangesOf(current);
+      rangesInto(current, rho);
       estimateFrame(center, current, nullptr, medianRange(current, rho));
     } else {
       stage.start(Stage::normals);
@@ -535,9 +557,11 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       for (std::size_t i = 0; i < n; ++i)
         sigma[i] = bandwidths[center].similarity;
     } else {
+      std::vector<float>& at = workspace.profile_sigma;
+      profileMap(profiles[center].range, profiles[center].sigma, rho, at);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
-        sigma[i] = current.valid[i] ? parameters.similarity_scale * profiles[center].sigmaAt(rho[i]) : 0.0f;
+        sigma[i] = current.valid[i] ? parameters.similarity_scale * at[i] : 0.0f;
     }
     if (parameters.normal_presmooth_window > 1) {
       std::vector<float> range_sigma(n);
@@ -582,21 +606,37 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
                 ? std::max(1.0f, estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k], viewpoint))
                 : 1.0f;
         const bool cross = ratio > 1.0f;
-        if (!(parameters.distance_bandwidth > 0.0f)) {
+        const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
+        std::vector<float>& sig = workspace.profile_sigma;
+        std::vector<float>& ext = workspace.profile_extent;
+        if (own_d || own_s)
+          profileMap(profiles[k].range, profiles[k].sigma, rho, sig);
+        if (own_d) {
+          profileMap(profiles[k].range, profiles[k].extent, rho, ext);
           inverse_d2[k].resize(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-          for (std::size_t i = 0; i < n; ++i) {
-            const float d = parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i];
-            const float s = parameters.similarity_scale * ratio * profiles[k].sigmaAt(rho[i]);
-            inverse_d2[k][i] = detail::inverseSquare(cross ? std::sqrt(d * d + 2.0f * s * s) : d);
+          float* __restrict out = inverse_d2[k].data();
+          const float* __restrict e = ext.data();
+          const float* __restrict g = sig.data();
+          const float* __restrict r = rho.data();
+          const float ds = parameters.distance_scale, ss = parameters.similarity_scale * ratio;
+          const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+          for (std::ptrdiff_t i = 0; i < size; ++i) {
+            const float d = ds * e[i] * r[i];
+            const float s = ss * g[i];
+            out[i] = detail::inverseSquareInline(cross ? std::sqrt(d * d + 2.0f * s * s) : d);
           }
           term.inverse_distance2 = &inverse_d2[k];
         }
-        if (!(parameters.similarity_bandwidth > 0.0f)) {
+        if (own_s) {
           inverse_s2[k].resize(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-          for (std::size_t i = 0; i < n; ++i)
-            inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * ratio * profiles[k].sigmaAt(rho[i]));
+          float* __restrict out = inverse_s2[k].data();
+          const float* __restrict g = sig.data();
+          const float ss = parameters.similarity_scale * ratio;
+          const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+          for (std::ptrdiff_t i = 0; i < size; ++i)
+            out[i] = detail::inverseSquareInline(ss * g[i]);
           term.inverse_similarity2 = &inverse_s2[k];
         }
       }

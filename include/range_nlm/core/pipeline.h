@@ -247,6 +247,9 @@ struct Workspace
   FilterRun run;
   NormalField normals;
   std::vector<float> offsets, sigma, limit;
+  /// Per-point ranges, profile values and per-frame bandwidth maps of a run.
+  std::vector<float> ranges, profile_sigma, profile_extent;
+  std::vector<std::vector<float>> inverse_d2, inverse_s2;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// If set, told where each phase of a run begins and ends. Not owned.
