@@ -219,6 +219,13 @@ NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint)
 {
+  return detail::estimateNoiseProfile(grid, search_window, samples, seed, viewpoint, 1);
+}
+
+NoiseProfile
+detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                             const Viewpoint& viewpoint, int threads)
+{
   std::vector<int> candidates;
   candidates.reserve(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i)
@@ -234,10 +241,17 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
   {
     float rho, sigma, extent;
   };
-  std::vector<Sample> found;
-  found.reserve(samples);
+  // The samples are drawn in order, then evaluated in parallel, each into its own slot; the
+  // slots of windows that qualify are kept in sample order.
+  std::vector<int> picked(static_cast<std::size_t>(std::max(samples, 0)));
+  for (int& k : picked)
+    k = candidates[rng() % candidates.size()];
+  std::vector<Sample> slots(picked.size());
+  std::vector<unsigned char> kept(picked.size(), 0);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
   for (int s = 0; s < samples; ++s) {
-    const int k = candidates[rng() % candidates.size()];
+    const int k = picked[s];
     const int u = k % grid.width, v = k / grid.width;
     double sum[3] = {0, 0, 0}, sq[6] = {0, 0, 0, 0, 0, 0}, max_dist2 = 0.0;
     int count = 0;
@@ -268,8 +282,14 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
     const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
     if (!(rho > 0.0))
       continue;
-    found.push_back(Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)});
+    slots[s] = Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)};
+    kept[s] = 1;
   }
+  std::vector<Sample> found;
+  found.reserve(picked.size());
+  for (std::size_t s = 0; s < picked.size(); ++s)
+    if (kept[s])
+      found.push_back(slots[s]);
   if (found.empty())
     throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
   std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
@@ -353,12 +373,20 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step)
 {
+  return detail::estimateNoiseCorrelation(grid, step, 1);
+}
+
+NoiseCorrelation
+detail::estimateNoiseCorrelation(const Grid& grid, int step, int threads)
+{
   NoiseCorrelation result;
   const int w = grid.width, h = grid.height;
   step = std::max(1, step);
-  std::vector<float> values;
+  // The lags are independent: one per thread at a time, each with its own values.
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(detail::resolveThreads(threads))
   for (int lag = 1; lag <= 8; ++lag) {
-    values.clear();
+    std::vector<float> values;
     auto add = [&](std::size_t a, std::size_t c, std::size_t b) {
       if (!(grid.valid[a] && grid.valid[b] && grid.valid[c]))
         return;
@@ -381,7 +409,7 @@ estimateNoiseCorrelation(const Grid& grid, int step)
     if (lag == 1)
       result.samples = values.size();
     if (values.size() < 64)
-      continue;
+      continue; // scale stays 0
     // The mean of the smallest 80 %: robust to depth edges, and unlike a median not stuck on
     // the steps of a quantized depth unit.
     const std::size_t keep = values.size() * 4 / 5;

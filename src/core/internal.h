@@ -37,6 +37,16 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
 void
 interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                    std::size_t n);
+/// estimateNoiseProfile by `threads` threads (0 = OpenMP's default), with the same result.
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint, int threads);
+/// estimateNoiseCorrelation by `threads` threads, with the same result.
+NoiseCorrelation
+estimateNoiseCorrelation(const Grid& grid, int step, int threads);
+/// automaticDilation by `threads` threads, with the same result.
+int
+automaticDilation(const Grid& frame, int threads);
 /// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
 void
 copyGrid(const Grid& from, Grid& to, int threads);

@@ -296,8 +296,14 @@ subsample(const Grid& from, int k, int u0, int v0, Grid& to)
 int
 automaticDilation(const Grid& frame)
 {
+  return detail::automaticDilation(frame, 1);
+}
+
+int
+detail::automaticDilation(const Grid& frame, int threads)
+{
   const int lag = std::clamp((8 * frame.width + 320) / 640, 2, 8);
-  const NoiseCorrelation c = estimateNoiseCorrelation(frame);
+  const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, 4, threads);
   const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
   return far > 0.0f && near < 0.5f * far ? std::clamp((2 * frame.width + 320) / 640, 2, 4) : 1;
 }
@@ -320,7 +326,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     // estimate in a frame without a valid point (runContiguous says so).
     const int needed = std::max({parameters.search_window, parameters.patch_size, parameters.normal_window,
                                  parameters.normal_presmooth_window});
-    k = empty ? 1 : automaticDilation(input);
+    k = empty ? 1 : detail::automaticDilation(input, detail::resolveThreads(parameters.threads));
     if (input.width / k < needed || input.height / k < needed)
       k = 1;
   }
@@ -474,7 +480,8 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
   auto estimateFrame = [&](int k, const Grid& g, const NormalField* normals, float rho_median) {
     const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - center) * 7919u;
     if (adaptive) {
-      profiles[k] = estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed, viewpoint);
+      profiles[k] =
+          detail::estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed, viewpoint, threads);
       Bandwidths b;
       b.sigma_s = profiles[k].sigmaAt(rho_median);
       b.mu_d = profiles[k].extentAt(rho_median) * rho_median;
