@@ -47,6 +47,11 @@ estimateNoiseCorrelation(const Grid& grid, int step, int threads);
 /// automaticDilation by `threads` threads, with the same result.
 int
 automaticDilation(const Grid& frame, int threads);
+/// presmoothAlongRays into `out` (its storage reused), with the padded planes in `planes` if given
+/// (resized as needed), else in memory of their own.
+void
+presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                   int threads, Grid& out, std::vector<float>* planes);
 /// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
 void
 copyGrid(const Grid& from, Grid& to, int threads);

@@ -206,12 +206,21 @@ Grid
 presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
                    int threads)
 {
+  Grid out;
+  detail::presmoothAlongRays(grid, window, sigma, viewpoint, threads, out, nullptr);
+  return out;
+}
+
+void
+detail::presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                           int threads, Grid& out, std::vector<float>* planes)
+{
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
   threads = detail::resolveThreads(threads);
-  const detail::PaddedGrid pad(grid, r, viewpoint, threads, true);
+  const detail::PaddedGrid pad(grid, r, viewpoint, threads, true, planes);
   const detail::RowKernels& kernels = detail::rowKernels();
-  Grid out = grid;
+  detail::copyGrid(grid, out, threads);
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
@@ -241,7 +250,6 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
       }
     }
   }
-  return out;
 }
 
 } // namespace range_nlm

@@ -272,24 +272,26 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 /// The pixels (u0 + a k, v0 + b k) of a grid-sized array as an array of their own.
 template <typename T>
 void
-subsample(const std::vector<T>& from, int width, int height, int k, int u0, int v0, std::vector<T>& to)
+subsample(const std::vector<T>& from, int width, int height, int k, int u0, int v0, std::vector<T>& to, int threads)
 {
   const int w = (width - u0 + k - 1) / k, h = (height - v0 + k - 1) / k;
   to.resize(static_cast<std::size_t>(w) * h);
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (int b = 0; b < h; ++b)
     for (int a = 0; a < w; ++a)
       to[static_cast<std::size_t>(b) * w + a] = from[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k];
 }
 
 void
-subsample(const Grid& from, int k, int u0, int v0, Grid& to)
+subsample(const Grid& from, int k, int u0, int v0, Grid& to, int threads)
 {
   to.width = (from.width - u0 + k - 1) / k;
   to.height = (from.height - v0 + k - 1) / k;
-  subsample(from.x, from.width, from.height, k, u0, v0, to.x);
-  subsample(from.y, from.width, from.height, k, u0, v0, to.y);
-  subsample(from.z, from.width, from.height, k, u0, v0, to.z);
-  subsample(from.valid, from.width, from.height, k, u0, v0, to.valid);
+  subsample(from.x, from.width, from.height, k, u0, v0, to.x, threads);
+  subsample(from.y, from.width, from.height, k, u0, v0, to.y, threads);
+  subsample(from.z, from.width, from.height, k, u0, v0, to.z, threads);
+  subsample(from.valid, from.width, from.height, k, u0, v0, to.valid, threads);
 }
 } // namespace
 
@@ -341,12 +343,16 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
   FilterParameters coarse = parameters;
   coarse.dilation = 1;
   coarse.iterations = std::max(1, parameters.iterations - 1);
-  Grid result;
-  detail::copyGrid(input, result, detail::resolveThreads(parameters.threads));
-  std::vector<Grid> sub(frames.size());
+  const int threads = detail::resolveThreads(parameters.threads);
+  // Kept in the workspace: the next run on frames of this size allocates nothing here.
+  Grid& result = workspace.merged;
+  detail::copyGrid(input, result, threads);
+  std::vector<Grid>& sub = workspace.phase_frames;
+  sub.resize(frames.size());
   std::vector<const Grid*> sub_frames(frames.size());
   std::vector<unsigned char> sub_active;
-  Workspace phase;
+  workspace.phase.resize(1);
+  Workspace& phase = workspace.phase.front();
   phase.observer = workspace.observer;
   for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
     for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
@@ -356,11 +362,11 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
           runContiguous(frames, center, parameters, viewpoint, active, workspace); // reports the size error
           return;
         }
-        subsample(*frames[f], k, u0, v0, sub[f]);
+        subsample(*frames[f], k, u0, v0, sub[f], threads);
         sub_frames[f] = &sub[f];
       }
       if (!active.empty())
-        subsample(active, input.width, input.height, k, u0, v0, sub_active);
+        subsample(active, input.width, input.height, k, u0, v0, sub_active, threads);
       split.stop();
       try {
         runContiguous(sub_frames, center, coarse, viewpoint, sub_active, phase);
@@ -370,6 +376,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
       }
       split.start(Stage::dilation);
       const Grid& out = phase.run.output;
+#pragma omp parallel for schedule(static) num_threads(threads)
       for (int b = 0; b < out.height; ++b)
         for (int a = 0; a < out.width; ++a) {
           const std::size_t from = static_cast<std::size_t>(b) * out.width + a;
@@ -381,7 +388,7 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     }
   split.stop();
   if (parameters.iterations <= 1) {
-    workspace.run.output = std::move(result);
+    std::swap(workspace.run.output, result);
     workspace.run.bandwidths = phase.run.bandwidths;
     workspace.run.frame_weights = phase.run.frame_weights;
     return;
@@ -545,8 +552,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       stage.start(Stage::bandwidths);
       estimateFrame(center, current, &normals, 0.0f);
     }
-    auto gateFor = [&](const std::vector<float>& sig) {
-      std::vector<float> gate;
+    auto gateFor = [&](const std::vector<float>& sig) -> const std::vector<float>& {
+      std::vector<float>& gate = workspace.gate;
+      gate.clear();
       if (parameters.normal_edge_gate > 0.0f) {
         gate.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -571,18 +579,23 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         sigma[i] = current.valid[i] ? parameters.similarity_scale * at[i] : 0.0f;
     }
     if (parameters.normal_presmooth_window > 1) {
-      std::vector<float> range_sigma(n);
+      std::vector<float>& range_sigma = workspace.range_sigma;
+      range_sigma.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
-      const std::vector<float> gate = gateFor(sigma);
+      const std::vector<float>& gate = gateFor(sigma);
       stage.start(Stage::presmoothing);
-      const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
+      // The padded planes of the pre-smoothing are those of the normal fits that follow (not
+      // needed by then).
+      Grid& smooth = workspace.smooth;
+      detail::presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads, smooth,
+                                 &workspace.normal_planes);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
                                    normals, &workspace.normal_planes);
     } else if (adaptive) {
-      const std::vector<float> gate = gateFor(sigma);
+      const std::vector<float>& gate = gateFor(sigma);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
                                    normals, &workspace.normal_planes);

@@ -248,8 +248,15 @@ struct Workspace
   NormalField normals;
   std::vector<float> offsets, sigma, limit;
   /// Per-point ranges, profile values and per-frame bandwidth maps of a run.
-  std::vector<float> ranges, profile_sigma, profile_extent;
+  std::vector<float> ranges, profile_sigma, profile_extent, range_sigma, gate;
   std::vector<std::vector<float>> inverse_d2, inverse_s2;
+  /// The pre-smoothed copy the normals are fitted on.
+  Grid smooth;
+  /// Dilated passes: the frames of one phase, the merged result of all phases, and the
+  /// workspace of the phases' runs (one element once used).
+  std::vector<Grid> phase_frames;
+  Grid merged;
+  std::vector<Workspace> phase;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// If set, told where each phase of a run begins and ends. Not owned.
