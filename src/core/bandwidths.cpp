@@ -316,15 +316,30 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b)
 {
+  return detail::framesMoved(a, normals_a, b, 1);
+}
+
+bool
+detail::framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads)
+{
   if (a.size() != b.size() || normals_a.size() != a.size() || a.width <= 0)
     return false;
   // Blocks of about 1/20 of the width (32 pixels at 640): many noise blobs each, so that their
   // median difference is near 0 for noise, however correlated, and near the motion where the
   // camera or the scene moved.
   const int block = std::max(8, a.width / 20);
-  std::vector<float> offsets, spreads, along;
-  for (int v0 = 0; v0 + block <= a.height; v0 += block)
-    for (int u0 = 0; u0 + block <= a.width; u0 += block) {
+  const int columns = a.width / block, rows = a.height / block;
+  // Each block by one thread into its own slot (NaN: too few pixels); a median does not depend
+  // on the order of its values.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> block_offsets(static_cast<std::size_t>(columns) * rows, nan), block_spreads(block_offsets);
+  (void)threads;
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> along;
+#pragma omp for schedule(dynamic, 4)
+    for (int t = 0; t < columns * rows; ++t) {
+      const int v0 = (t / columns) * block, u0 = (t % columns) * block;
       along.clear();
       for (int v = v0; v < v0 + block; ++v)
         for (int u = u0; u < u0 + block; ++u) {
@@ -338,8 +353,15 @@ framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b)
       const float m = medianOf(along);
       for (float& d : along)
         d = std::fabs(d - m);
-      offsets.push_back(std::fabs(m));
-      spreads.push_back(medianOf(along));
+      block_offsets[t] = std::fabs(m);
+      block_spreads[t] = medianOf(along);
+    }
+  }
+  std::vector<float> offsets, spreads;
+  for (std::size_t t = 0; t < block_offsets.size(); ++t)
+    if (!std::isnan(block_offsets[t])) {
+      offsets.push_back(block_offsets[t]);
+      spreads.push_back(block_spreads[t]);
     }
   if (offsets.size() < 4)
     return false;
@@ -351,20 +373,48 @@ float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
                            const Viewpoint& viewpoint)
 {
+  return detail::estimateTemporalNoiseRatio(a, normals_a, b, profile_b, viewpoint, 1);
+}
+
+float
+detail::estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b,
+                                   const NoiseProfile& profile_b, const Viewpoint& viewpoint, int threads)
+{
   if (a.size() != b.size() || normals_a.size() != a.size() || profile_b.empty())
     return 0.0f;
-  std::vector<float> ratios;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (!a.valid[i] || !b.valid[i] || !std::isfinite(normals_a.nx[i]))
-      continue;
-    const float dx = a.x[i] - viewpoint[0], dy = a.y[i] - viewpoint[1], dz = a.z[i] - viewpoint[2];
-    const float sigma = profile_b.sigmaAt(std::sqrt(dx * dx + dy * dy + dz * dz));
-    if (!(sigma > 0.0f))
-      continue;
-    const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
-                        (b.z[i] - a.z[i]) * normals_a.nz[i];
-    ratios.push_back(std::fabs(along) / sigma);
+  // Blocks of points by `threads` threads, each block's ratios in its own list (a median does not
+  // depend on the order of its values); sigmaAt per block by the vectorized interpolation.
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size()), kBlock = 4096;
+  const std::ptrdiff_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<float>> found(static_cast<std::size_t>(blocks));
+  (void)threads;
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> rho(kBlock), sigma(kBlock);
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+      const std::ptrdiff_t lo = blk * kBlock, m = std::min(kBlock, n - lo);
+      for (std::ptrdiff_t k = 0; k < m; ++k) {
+        const std::size_t i = static_cast<std::size_t>(lo + k);
+        const float dx = a.x[i] - viewpoint[0], dy = a.y[i] - viewpoint[1], dz = a.z[i] - viewpoint[2];
+        const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+        rho[k] = a.valid[i] ? r : 0.0f;
+      }
+      detail::interpolateProfile(profile_b.range, profile_b.sigma, rho.data(), sigma.data(), static_cast<std::size_t>(m));
+      std::vector<float>& ratios = found[blk];
+      for (std::ptrdiff_t k = 0; k < m; ++k) {
+        const std::size_t i = static_cast<std::size_t>(lo + k);
+        if (!a.valid[i] || !b.valid[i] || !std::isfinite(normals_a.nx[i]) || !(sigma[k] > 0.0f))
+          continue;
+        const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
+                            (b.z[i] - a.z[i]) * normals_a.nz[i];
+        ratios.push_back(std::fabs(along) / sigma[k]);
+      }
+    }
   }
+  std::vector<float> ratios;
+  for (const std::vector<float>& r : found)
+    ratios.insert(ratios.end(), r.begin(), r.end());
   if (ratios.size() < 64)
     return 0.0f;
   return 1.4826f * 0.70710678f * medianOf(std::move(ratios));

@@ -41,6 +41,13 @@ interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, c
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint, int threads);
+/// framesMoved by `threads` threads, with the same result.
+bool
+framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads);
+/// estimateTemporalNoiseRatio by `threads` threads, with the same result.
+float
+estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
+                           const Viewpoint& viewpoint, int threads);
 /// estimateNoiseCorrelation by `threads` threads, with the same result.
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step, int threads);

@@ -622,8 +622,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         const float ratio =
             k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
                             (parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded &&
-                             !framesMoved(current, normals, *frames[k])))
-                ? std::max(1.0f, estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k], viewpoint))
+                             !detail::framesMoved(current, normals, *frames[k], threads)))
+                ? std::max(1.0f, detail::estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k],
+                                                                    viewpoint, threads))
                 : 1.0f;
         const bool cross = ratio > 1.0f;
         const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
