@@ -318,6 +318,8 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
+  // Checked before anything runs with parameters.threads threads (OpenMP crashes on absurd counts).
+  parameters.validate();
   const Grid& input = *frames[center];
   const bool empty = input.countValid() == 0;
   int k = parameters.dilation;
