@@ -299,3 +299,35 @@ TEST(Dilation, DefaultRunIsTheSameForAnyThreadCountAndAReusedWorkspace)
     }
   }
 }
+
+// The temporal filter's motion test and frame-to-frame noise ratio run on several threads: the
+// same answers as one thread; and the temporal default (radius 1, guarded cross-frame bandwidths,
+// automatic dilation) gives the same bits with 1, 2 and 3 threads, with holes and borders.
+TEST(FramesMoved, MotionTestNoiseRatioAndTemporalRunDoNotDependOnTheThreadCount)
+{
+  SceneOptions o = planeScene("stereo", 320, 240, 3);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  const auto seq = renderSequence(o);
+  const Grid a = gridOf(seq[1].noisy), b = gridOf(seq[0].noisy), c = gridOf(seq[2].noisy);
+  const NormalField n = estimateNormals(a, 7, kOrigin, 1);
+  const NoiseProfile profile = estimateNoiseProfile(b, 9, 1000, 7, kOrigin);
+  Grid closer = b;
+  for (std::size_t i = 0; i < closer.size(); ++i)
+    closer.z[i] -= 0.04f;
+  const float ratio = estimateTemporalNoiseRatio(a, n, b, profile, kOrigin);
+  EXPECT_GT(ratio, 0.0f);
+  for (int threads : {2, 3}) {
+    EXPECT_EQ(detail::framesMoved(a, n, b, threads), framesMoved(a, n, b)) << threads;
+    EXPECT_EQ(detail::framesMoved(a, n, closer, threads), framesMoved(a, n, closer)) << threads;
+    EXPECT_EQ(detail::estimateTemporalNoiseRatio(a, n, b, profile, kOrigin, threads), ratio) << threads;
+  }
+  FilterParameters p = FilterParameters::recommended();
+  p.threads = 1;
+  const FilterRun one = runFilter({&b, &a, &c}, 1, p, kOrigin, {});
+  EXPECT_FALSE(sameBits(one.output, a));
+  for (int threads : {2, 3}) {
+    p.threads = threads;
+    EXPECT_TRUE(sameBits(runFilter({&b, &a, &c}, 1, p, kOrigin, {}).output, one.output)) << threads << " threads";
+  }
+}
