@@ -51,9 +51,11 @@ const char* const kUsage =
     "Usage:\n"
     "  range_nlm_bench [options]\n"
     "Times range_nlm's NonLocalMeansFilter (fast and direct evaluation) and the temporal filter\n"
-    "against pcl::FastBilateralFilterOMP and pcl::MovingLeastSquares on the same frames, in the\n"
-    "paper's configurations: static 7x7 search / 5x5 patch on a 640x480 frame, and temporal\n"
-    "19x19 / 11x11 with radius 1 (3 frames) on 480x400 centre crops. Each method runs in its own\n"
+    "against pcl::FastBilateralFilterOMP and pcl::MovingLeastSquares on the same frames: first the\n"
+    "preset as users run it (its own window sizes; static on a 640x480 frame, then temporal with\n"
+    "radius 1 on three whole frames), then the paper's configurations: static 7x7 search / 5x5\n"
+    "patch on a 640x480 frame, and temporal 19x19 / 11x11 with radius 1 (3 frames) on 480x400\n"
+    "centre crops. Each method runs in its own\n"
     "child process; its peak memory is the child's ru_maxrss reported by wait4. The methods of a\n"
     "configuration take turns, --runs rounds of one turn each: an untimed warm-up run, then a\n"
     "timed one. A change of the machine's speed then reaches all of them alike. Each method's\n"
@@ -71,6 +73,8 @@ constexpr float kBilateralSigmaS = 5.0f, kBilateralSigmaR = 0.03f;
 constexpr double kStaticTargetMs = 30.0, kTemporalTargetMs = 1000.0, kSequenceTargetMb = 200.0;
 // The preset as users run it on a VGA frame: 30 frames per second.
 constexpr double kRealTimeTargetMs = 33.0;
+// The temporal filter with the preset (radius 1, three frames) against the static one per frame.
+constexpr double kTemporalOverStatic = 2.0;
 
 double
 megabytes(std::uint64_t bytes)
@@ -400,6 +404,24 @@ benchTemporal(const Settings& s, const Frames& frames)
 {
   const CloudConstPtr& cloud = frames.clouds[frames.center];
   std::vector<Pending> methods;
+  Frames single = frames;
+  single.clouds = {cloud};
+  single.center = 0;
+  if (frames.preset_windows) {
+    // What users run on a sequence, against the static filter on its centre frame and the
+    // filter it must replace, in the same rounds.
+    const FilterParameters& p = s.parameters;
+    methods.push_back(pending(s, "range_nlm temporal fast", frames, s.runs, true,
+                              "TemporalNonLocalMeansFilter, centre of 3 frames; " + describe(s) + "; Evaluation::fast",
+                              prepareTemporal(frames, parametersFor(s, p.search_window, p.patch_size, Evaluation::fast))));
+    methods.push_back(pending(s, "range_nlm fast", single, s.runs, true,
+                              "NonLocalMeansFilter on the centre frame alone; " + describe(s) + "; Evaluation::fast",
+                              prepareStatic(cloud, parametersFor(s, p.search_window, p.patch_size, Evaluation::fast))));
+    methods.push_back(pending(s, "pcl FastBilateralFilterOMP", single, s.runs, true,
+                              "centre frame alone (no temporal neighbours), sigma_s 5, sigma_r 0.03",
+                              prepareBilateral(cloud, s.threads)));
+    return measureInterleaved(s, frames.label, std::move(methods));
+  }
   const FilterParameters fast = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::fast);
   const FilterParameters direct = parametersFor(s, kTemporalSearch, kTemporalPatch, Evaluation::direct);
   methods.push_back(
@@ -416,9 +438,6 @@ benchTemporal(const Settings& s, const Frames& frames)
     methods.push_back(pending(s, "range_nlm temporal direct", frames, 1, false,
                               "Evaluation::direct, timed once without warm-up (--all for warm-up + --runs)",
                               prepareTemporal(frames, direct)));
-  Frames single = frames;
-  single.clouds = {cloud};
-  single.center = 0;
   methods.push_back(pending(s, "pcl FastBilateralFilterOMP", single, s.runs, true,
                             "centre frame alone (no temporal neighbours), sigma_s 5, sigma_r 0.03",
                             prepareBilateral(cloud, s.threads)));
@@ -478,6 +497,8 @@ stagesOf(const FilterParameters& p, bool temporal)
 {
   const bool adaptive = p.bandwidth_model == BandwidthModel::range_adaptive;
   std::vector<Stage> stages;
+  if (p.dilation != 1)
+    stages.push_back(Stage::dilation);
   if (temporal)
     stages.push_back(Stage::neighbour_frames);
   if (!adaptive)
@@ -499,6 +520,9 @@ stageLabel(Stage stage, const FilterParameters& p, std::size_t frames)
 {
   const auto square = [](int n) { return std::to_string(n) + "x" + std::to_string(n); };
   switch (stage) {
+  case Stage::dilation:
+    return p.dilation == 0 ? "dilation (automatic: estimate, split into phases, merge)"
+                           : "dilation " + std::to_string(p.dilation) + " (split into phases, merge)";
   case Stage::neighbour_frames:
     return "neighbour frames (" + std::to_string(frames - 1) + ")";
   case Stage::bandwidths:
@@ -529,7 +553,8 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
   b.steps.push_back({"cloud -> Grid (detail::toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
                      false, true, false});
   for (Stage stage : stages)
-    b.steps.push_back({stageLabel(stage, p, count), stage != Stage::neighbour_frames, true, false});
+    b.steps.push_back({stageLabel(stage, p, count), stage != Stage::neighbour_frames && stage != Stage::dilation,
+                       true, false});
   if (with_direct)
     b.steps.push_back({"offsets direct " + std::to_string(p.search_window) + "x" + std::to_string(p.search_window) +
                            "/" + std::to_string(p.patch_size) + "x" + std::to_string(p.patch_size),
@@ -564,7 +589,7 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
       runFilter(pointers, static_cast<int>(c), fast, viewpoint, {}, workspace);
       for (Stage stage : stages) {
         const double total = timer.ms[static_cast<int>(stage)];
-        ms.push_back(stage == Stage::neighbour_frames ? total : total / p.iterations);
+        ms.push_back(stage == Stage::neighbour_frames || stage == Stage::dilation ? total : total / p.iterations);
       }
       if (with_direct) {
         StageTimer direct_timer;
@@ -707,17 +732,22 @@ presetFrames(const Settings& s, const CloudConstPtr& input)
   return f;
 }
 
+/// The temporal frames: the paper's configuration on centre crops (`crop`), or the preset as
+/// users run it on whole frames.
 Frames
-temporalFrames(const Settings& s, const CloudConstPtr& input)
+temporalFrames(const Settings& s, const CloudConstPtr& input, bool crop = true)
 {
   Frames f;
   const int count = 2 * kTemporalRadius + 1;
+  const auto cut = [&](const Cloud& cloud, const std::string& what) {
+    return crop ? bench::cropCentre(cloud, kTemporalWidth, kTemporalHeight, what) : cloud;
+  };
   if (s.synthetic_frames) {
-    const Cloud crop = bench::cropCentre(*input, kTemporalWidth, kTemporalHeight, "'" + s.input + "'");
+    const Cloud base = cut(*input, "'" + s.input + "'");
     for (int k = 0; k < count; ++k)
-      f.clouds.push_back(std::make_shared<Cloud>(bench::withFreshNoise(crop, s.seed + k)));
-    f.source = "'" + s.input + "' centre crop with fresh noise (seeds " + std::to_string(s.seed) + ".." +
-               std::to_string(s.seed + count - 1) + ")";
+      f.clouds.push_back(std::make_shared<Cloud>(bench::withFreshNoise(base, s.seed + k)));
+    f.source = "'" + s.input + "'" + (crop ? " centre crop" : "") + " with fresh noise (seeds " +
+               std::to_string(s.seed) + ".." + std::to_string(s.seed + count - 1) + ")";
   } else {
     std::vector<std::string> files;
     try {
@@ -731,16 +761,29 @@ temporalFrames(const Settings& s, const CloudConstPtr& input)
                        " (or use --synthetic-frames)");
     for (int k = 0; k < count; ++k) {
       const CloudConstPtr frame = loadXyz(files[static_cast<std::size_t>(k)]);
-      f.clouds.push_back(std::make_shared<Cloud>(bench::cropCentre(
-          *frame, kTemporalWidth, kTemporalHeight, "'" + files[static_cast<std::size_t>(k)] + "'")));
+      f.clouds.push_back(std::make_shared<Cloud>(cut(*frame, "'" + files[static_cast<std::size_t>(k)] + "'")));
     }
-    f.source = "first " + std::to_string(count) + " frames of '" + s.sequence_dir + "', centre crops";
+    f.source = "first " + std::to_string(count) + " frames of '" + s.sequence_dir + "'" + (crop ? ", centre crops" : "");
   }
   f.center = static_cast<std::size_t>(kTemporalRadius);
   f.label = "temporal " + std::to_string(kTemporalSearch) + "x" + std::to_string(kTemporalSearch) + "/" +
             std::to_string(kTemporalPatch) + "x" + std::to_string(kTemporalPatch) +
             " r=" + std::to_string(kTemporalRadius) + " " + sizeText(*f.clouds[f.center]);
   chooseMlsRadius(s, f);
+  return f;
+}
+
+/// The temporal filter with the preset as it is (its windows, radius 1) on whole frames: the
+/// second configuration of the table.
+Frames
+presetTemporalFrames(const Settings& s, const CloudConstPtr& input)
+{
+  Frames f = temporalFrames(s, input, false);
+  const FilterParameters& p = s.parameters;
+  f.label = "temporal " + s.preset + " " + std::to_string(p.search_window) + "x" + std::to_string(p.search_window) +
+            "/" + std::to_string(p.patch_size) + "x" + std::to_string(p.patch_size) +
+            " r=" + std::to_string(kTemporalRadius) + " " + sizeText(*f.clouds[f.center]);
+  f.preset_windows = true;
   return f;
 }
 
@@ -782,6 +825,15 @@ evaluateTargets(const Settings& s, const std::vector<Row>& rows, const SequenceM
     targets.push_back({"preset fast vs FastBilateralFilterOMP, same run", preset->median_ms,
                        preset_fbf->median_ms, "ms", "<=", "FastBilateralFilterOMP",
                        preset->median_ms <= preset_fbf->median_ms});
+  // The temporal filter (radius 1) with the preset: at most twice the static filter's time on its
+  // centre frame, in the same rounds.
+  const std::string preset_temporal = "temporal " + s.preset + " ";
+  const Row* temporal_preset = findRow(rows, "range_nlm temporal fast", preset_temporal);
+  const Row* temporal_static = findRow(rows, "range_nlm fast", preset_temporal);
+  if (temporal_preset && temporal_static)
+    targets.push_back({"preset temporal fast (radius 1) vs 2 x static on its centre frame, same run",
+                       temporal_preset->median_ms, kTemporalOverStatic * temporal_static->median_ms, "ms", "<=",
+                       "2 x static", temporal_preset->median_ms <= kTemporalOverStatic * temporal_static->median_ms});
   const std::string paper_static = "static " + std::to_string(kStaticSearch) + "x";
   const Row* fast = findRow(rows, "range_nlm fast", paper_static);
   const Row* fbf = findRow(rows, "pcl FastBilateralFilterOMP", paper_static);
@@ -791,7 +843,8 @@ evaluateTargets(const Settings& s, const std::vector<Row>& rows, const SequenceM
   if (fast && fbf)
     targets.push_back({"static fast vs FastBilateralFilterOMP, same run", fast->median_ms, fbf->median_ms,
                        "ms", "<=", "FastBilateralFilterOMP", fast->median_ms <= fbf->median_ms});
-  const Row* temporal = findRow(rows, "range_nlm temporal fast", "temporal");
+  const Row* temporal =
+      findRow(rows, "range_nlm temporal fast", "temporal " + std::to_string(kTemporalSearch) + "x");
   if (temporal)
     targets.push_back({"temporal fast median ms/frame (" + temporal->config + ")", temporal->median_ms,
                        kTemporalTargetMs, "ms", "<=", "target", temporal->median_ms <= kTemporalTargetMs});
@@ -1150,8 +1203,8 @@ settingsFrom(const po::variables_map& vm)
       throw UsageError("--json-file '" + s.json_file + "': cannot open the file for writing");
   }
   s.quiet = vm.count("quiet") > 0;
-  if (s.config != "all" && s.config != "static" && s.config != "temporal")
-    throw UsageError("--config '" + s.config + "' is invalid: expected all, static or temporal");
+  if (s.config != "all" && s.config != "static" && s.config != "temporal" && s.config != "preset")
+    throw UsageError("--config '" + s.config + "' is invalid: expected all, static, temporal or preset");
   if (s.runs < 1 || s.runs > 1000)
     throw UsageError("--runs " + std::to_string(s.runs) + " is invalid: must be 1..1000");
   if (threads < 0 || threads > 1024)
@@ -1192,17 +1245,29 @@ runTiming(const Settings& s)
   // Frames are prepared in this process before any measurement; this process never runs
   // OpenMP code, so every child starts with a clean OpenMP runtime.
   const CloudConstPtr input = loadXyz(s.input);
+  // "preset": only the preset's configurations (the first two of "all").
   const bool do_static = s.config != "temporal", do_temporal = s.config != "static";
+  const bool do_paper = s.config != "preset";
   std::vector<std::string> sources;
   std::vector<Frames> configs;
   if (do_static) {
     configs.push_back(presetFrames(s, input));
     sources.push_back("static frames (" + s.preset + " preset): " + configs.back().source);
+  }
+  if (do_temporal) {
+    try {
+      configs.push_back(presetTemporalFrames(s, input));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(e.what());
+    }
+    sources.push_back("temporal frames (" + s.preset + " preset): " + configs.back().source);
+  }
+  if (do_static && do_paper) {
     configs.push_back(staticFrames(s, input));
     sources.push_back("static frames: " + configs.back().source + ", " + sizeText(*input) + ", " +
                       std::to_string(finiteCount(*input)) + " valid points");
   }
-  if (do_temporal) {
+  if (do_temporal && do_paper) {
     try {
       configs.push_back(temporalFrames(s, input));
     } catch (const std::invalid_argument& e) {
@@ -1276,7 +1341,7 @@ run(int argc, char** argv)
     ("sequence-dir", po::value<std::string>()->default_value(default_sequence),
      "directory whose first 3 .pcd frames (name order), cropped to their centre 480x400, form the temporal configuration")
     ("synthetic-frames", "temporal configuration: 3 copies of the --input centre crop with fresh noise instead of --sequence-dir")
-    ("config", po::value<std::string>()->default_value("all"), "configurations to time: all, static or temporal")
+    ("config", po::value<std::string>()->default_value("all"), "configurations to time: all, static, temporal, or preset (the preset's static and temporal configurations only)")
     ("preset", po::value<std::string>()->default_value("default"),
      "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
     ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")

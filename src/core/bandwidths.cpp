@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -152,6 +153,56 @@ medianOf(std::vector<float> v)
 }
 } // namespace
 
+void
+detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                           std::size_t n)
+{
+  if (xs.empty()) {
+    std::fill(out, out + n, 0.0f);
+    return;
+  }
+  // interpolate() for a block of points at a time, branch-free so that it vectorizes: the bin
+  // [xs[lo], xs[lo + 1]] of x is found by a scan over the (strictly increasing) ranges instead of
+  // a binary search per point, and the same arithmetic follows.
+  const std::size_t bins = xs.size();
+  const float front = xs.front(), back = xs.back(), first = ys.front(), last = ys.back();
+  constexpr std::size_t kBlock = 256;
+  // The bin's ends as bits, chosen with masks (GCC turns a select into a branch here).
+  std::uint32_t xl[kBlock], yl[kBlock], xh[kBlock], yh[kBlock];
+  const auto bits = [](float f) { return __builtin_bit_cast(std::uint32_t, f); };
+  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+    const int m = static_cast<int>(std::min(kBlock, n - i0));
+    const float* __restrict xv = x + i0;
+    float* __restrict o = out + i0;
+    if (bins == 1) {
+      for (int i = 0; i < m; ++i)
+        o[i] = first;
+      continue;
+    }
+    for (int i = 0; i < m; ++i)
+      xl[i] = bits(xs[0]), yl[i] = bits(ys[0]), xh[i] = bits(xs[1]), yh[i] = bits(ys[1]);
+    for (std::size_t b = 1; b + 1 < bins; ++b) {
+      const float xb = xs[b];
+      const std::uint32_t bxb = bits(xb), byb = bits(ys[b]), bxn = bits(xs[b + 1]), byn = bits(ys[b + 1]);
+      for (int i = 0; i < m; ++i) {
+        const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
+        xl[i] = (bxb & past) | (xl[i] & ~past);
+        yl[i] = (byb & past) | (yl[i] & ~past);
+        xh[i] = (bxn & past) | (xh[i] & ~past);
+        yh[i] = (byn & past) | (yh[i] & ~past);
+      }
+    }
+    for (int i = 0; i < m; ++i) {
+      const float lx = __builtin_bit_cast(float, xl[i]), ly = __builtin_bit_cast(float, yl[i]);
+      const float hx = __builtin_bit_cast(float, xh[i]), hy = __builtin_bit_cast(float, yh[i]);
+      const float gap = hx - lx;
+      const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
+      const float mid = ly + t * (hy - ly);
+      o[i] = xv[i] <= front ? first : (xv[i] >= back ? last : mid);
+    }
+  }
+}
+
 float
 NoiseProfile::sigmaAt(float rho) const
 {
@@ -168,6 +219,13 @@ NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint)
 {
+  return detail::estimateNoiseProfile(grid, search_window, samples, seed, viewpoint, 1);
+}
+
+NoiseProfile
+detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                             const Viewpoint& viewpoint, int threads)
+{
   std::vector<int> candidates;
   candidates.reserve(grid.size());
   for (std::size_t i = 0; i < grid.size(); ++i)
@@ -183,10 +241,17 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
   {
     float rho, sigma, extent;
   };
-  std::vector<Sample> found;
-  found.reserve(samples);
+  // The samples are drawn in order, then evaluated in parallel, each into its own slot; the
+  // slots of windows that qualify are kept in sample order.
+  std::vector<int> picked(static_cast<std::size_t>(std::max(samples, 0)));
+  for (int& k : picked)
+    k = candidates[rng() % candidates.size()];
+  std::vector<Sample> slots(picked.size());
+  std::vector<unsigned char> kept(picked.size(), 0);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
   for (int s = 0; s < samples; ++s) {
-    const int k = candidates[rng() % candidates.size()];
+    const int k = picked[s];
     const int u = k % grid.width, v = k / grid.width;
     double sum[3] = {0, 0, 0}, sq[6] = {0, 0, 0, 0, 0, 0}, max_dist2 = 0.0;
     int count = 0;
@@ -217,8 +282,14 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
     const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
     if (!(rho > 0.0))
       continue;
-    found.push_back(Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)});
+    slots[s] = Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)};
+    kept[s] = 1;
   }
+  std::vector<Sample> found;
+  found.reserve(picked.size());
+  for (std::size_t s = 0; s < picked.size(); ++s)
+    if (kept[s])
+      found.push_back(slots[s]);
   if (found.empty())
     throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
   std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
@@ -245,15 +316,30 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b)
 {
+  return detail::framesMoved(a, normals_a, b, 1);
+}
+
+bool
+detail::framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads)
+{
   if (a.size() != b.size() || normals_a.size() != a.size() || a.width <= 0)
     return false;
   // Blocks of about 1/20 of the width (32 pixels at 640): many noise blobs each, so that their
   // median difference is near 0 for noise, however correlated, and near the motion where the
   // camera or the scene moved.
   const int block = std::max(8, a.width / 20);
-  std::vector<float> offsets, spreads, along;
-  for (int v0 = 0; v0 + block <= a.height; v0 += block)
-    for (int u0 = 0; u0 + block <= a.width; u0 += block) {
+  const int columns = a.width / block, rows = a.height / block;
+  // Each block by one thread into its own slot (NaN: too few pixels); a median does not depend
+  // on the order of its values.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> block_offsets(static_cast<std::size_t>(columns) * rows, nan), block_spreads(block_offsets);
+  (void)threads;
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> along;
+#pragma omp for schedule(dynamic, 4)
+    for (int t = 0; t < columns * rows; ++t) {
+      const int v0 = (t / columns) * block, u0 = (t % columns) * block;
       along.clear();
       for (int v = v0; v < v0 + block; ++v)
         for (int u = u0; u < u0 + block; ++u) {
@@ -267,8 +353,15 @@ framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b)
       const float m = medianOf(along);
       for (float& d : along)
         d = std::fabs(d - m);
-      offsets.push_back(std::fabs(m));
-      spreads.push_back(medianOf(along));
+      block_offsets[t] = std::fabs(m);
+      block_spreads[t] = medianOf(along);
+    }
+  }
+  std::vector<float> offsets, spreads;
+  for (std::size_t t = 0; t < block_offsets.size(); ++t)
+    if (!std::isnan(block_offsets[t])) {
+      offsets.push_back(block_offsets[t]);
+      spreads.push_back(block_spreads[t]);
     }
   if (offsets.size() < 4)
     return false;
@@ -280,20 +373,48 @@ float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
                            const Viewpoint& viewpoint)
 {
+  return detail::estimateTemporalNoiseRatio(a, normals_a, b, profile_b, viewpoint, 1);
+}
+
+float
+detail::estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b,
+                                   const NoiseProfile& profile_b, const Viewpoint& viewpoint, int threads)
+{
   if (a.size() != b.size() || normals_a.size() != a.size() || profile_b.empty())
     return 0.0f;
-  std::vector<float> ratios;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (!a.valid[i] || !b.valid[i] || !std::isfinite(normals_a.nx[i]))
-      continue;
-    const float dx = a.x[i] - viewpoint[0], dy = a.y[i] - viewpoint[1], dz = a.z[i] - viewpoint[2];
-    const float sigma = profile_b.sigmaAt(std::sqrt(dx * dx + dy * dy + dz * dz));
-    if (!(sigma > 0.0f))
-      continue;
-    const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
-                        (b.z[i] - a.z[i]) * normals_a.nz[i];
-    ratios.push_back(std::fabs(along) / sigma);
+  // Blocks of points by `threads` threads, each block's ratios in its own list (a median does not
+  // depend on the order of its values); sigmaAt per block by the vectorized interpolation.
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(a.size()), kBlock = 4096;
+  const std::ptrdiff_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<float>> found(static_cast<std::size_t>(blocks));
+  (void)threads;
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> rho(kBlock), sigma(kBlock);
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t blk = 0; blk < blocks; ++blk) {
+      const std::ptrdiff_t lo = blk * kBlock, m = std::min(kBlock, n - lo);
+      for (std::ptrdiff_t k = 0; k < m; ++k) {
+        const std::size_t i = static_cast<std::size_t>(lo + k);
+        const float dx = a.x[i] - viewpoint[0], dy = a.y[i] - viewpoint[1], dz = a.z[i] - viewpoint[2];
+        const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+        rho[k] = a.valid[i] ? r : 0.0f;
+      }
+      detail::interpolateProfile(profile_b.range, profile_b.sigma, rho.data(), sigma.data(), static_cast<std::size_t>(m));
+      std::vector<float>& ratios = found[blk];
+      for (std::ptrdiff_t k = 0; k < m; ++k) {
+        const std::size_t i = static_cast<std::size_t>(lo + k);
+        if (!a.valid[i] || !b.valid[i] || !std::isfinite(normals_a.nx[i]) || !(sigma[k] > 0.0f))
+          continue;
+        const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
+                            (b.z[i] - a.z[i]) * normals_a.nz[i];
+        ratios.push_back(std::fabs(along) / sigma[k]);
+      }
+    }
   }
+  std::vector<float> ratios;
+  for (const std::vector<float>& r : found)
+    ratios.insert(ratios.end(), r.begin(), r.end());
   if (ratios.size() < 64)
     return 0.0f;
   return 1.4826f * 0.70710678f * medianOf(std::move(ratios));
@@ -302,12 +423,20 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step)
 {
+  return detail::estimateNoiseCorrelation(grid, step, 1);
+}
+
+NoiseCorrelation
+detail::estimateNoiseCorrelation(const Grid& grid, int step, int threads)
+{
   NoiseCorrelation result;
   const int w = grid.width, h = grid.height;
   step = std::max(1, step);
-  std::vector<float> values;
+  // The lags are independent: one per thread at a time, each with its own values.
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(detail::resolveThreads(threads))
   for (int lag = 1; lag <= 8; ++lag) {
-    values.clear();
+    std::vector<float> values;
     auto add = [&](std::size_t a, std::size_t c, std::size_t b) {
       if (!(grid.valid[a] && grid.valid[b] && grid.valid[c]))
         return;
@@ -330,7 +459,7 @@ estimateNoiseCorrelation(const Grid& grid, int step)
     if (lag == 1)
       result.samples = values.size();
     if (values.size() < 64)
-      continue;
+      continue; // scale stays 0
     // The mean of the smallest 80 %: robust to depth edges, and unlike a median not stuck on
     // the steps of a quantized depth unit.
     const std::size_t keep = values.size() * 4 / 5;

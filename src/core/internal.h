@@ -32,6 +32,33 @@ void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
                const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>* planes);
+/// The piecewise linear interpolation of NoiseProfile::sigmaAt / extentAt (ranges xs, values ys)
+/// at the n points x into out, with the same result for every point, vectorized.
+void
+interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                   std::size_t n);
+/// estimateNoiseProfile by `threads` threads (0 = OpenMP's default), with the same result.
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint, int threads);
+/// framesMoved by `threads` threads, with the same result.
+bool
+framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads);
+/// estimateTemporalNoiseRatio by `threads` threads, with the same result.
+float
+estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
+                           const Viewpoint& viewpoint, int threads);
+/// estimateNoiseCorrelation by `threads` threads, with the same result.
+NoiseCorrelation
+estimateNoiseCorrelation(const Grid& grid, int step, int threads);
+/// automaticDilation by `threads` threads, with the same result.
+int
+automaticDilation(const Grid& frame, int threads);
+/// presmoothAlongRays into `out` (its storage reused), with the padded planes in `planes` if given
+/// (resized as needed), else in memory of their own.
+void
+presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                   int threads, Grid& out, std::vector<float>* planes);
 /// `to` = `from`, copied by `threads` threads into `to`'s existing storage when the sizes match.
 void
 copyGrid(const Grid& from, Grid& to, int threads);

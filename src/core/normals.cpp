@@ -152,9 +152,10 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
       const std::size_t c0 = pad.at(0, v);
       // (Without a gate every valid neighbour counts: no gate, ranges or first normals.)
       const bool gated = range_gated || plane_gated;
+      // (Pass 1 has no plane gate: no first normals, so the kernel skips that test.)
       fits.window_moments(&pad.x[c0], &pad.y[c0], &pad.z[c0], &pad.f[c0], gated ? &pad.rho[c0] : nullptr,
-                          pad.stride, r, gated ? g.data() : nullptr, n0x.data(), n0y.data(), n0z.data(),
-                          range_gated ? 1.0f : 0.0f, width, acc.data());
+                          pad.stride, r, gated ? g.data() : nullptr, plane_gated ? n0x.data() : nullptr,
+                          n0y.data(), n0z.data(), range_gated ? 1.0f : 0.0f, width, acc.data());
       // The plane normal is the eigenvector of the smallest eigenvalue of the covariance (in
       // double: with noise close to the pixel spacing the covariance is nearly isotropic and
       // float rounding would decide the normal), a whole row at once (plane_fit.inc).
@@ -205,12 +206,21 @@ Grid
 presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
                    int threads)
 {
+  Grid out;
+  detail::presmoothAlongRays(grid, window, sigma, viewpoint, threads, out, nullptr);
+  return out;
+}
+
+void
+detail::presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma, const Viewpoint& viewpoint,
+                           int threads, Grid& out, std::vector<float>* planes)
+{
   const int width = grid.width, height = grid.height;
   const int r = window / 2;
   threads = detail::resolveThreads(threads);
-  const detail::PaddedGrid pad(grid, r, viewpoint, threads, true);
+  const detail::PaddedGrid pad(grid, r, viewpoint, threads, true, planes);
   const detail::RowKernels& kernels = detail::rowKernels();
-  Grid out = grid;
+  detail::copyGrid(grid, out, threads);
   (void)threads;
 #pragma omp parallel num_threads(threads)
   {
@@ -240,7 +250,6 @@ presmoothAlongRays(const Grid& grid, int window, const std::vector<float>& sigma
       }
     }
   }
-  return out;
 }
 
 } // namespace range_nlm

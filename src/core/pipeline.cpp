@@ -188,6 +188,8 @@ const char*
 toString(Stage stage)
 {
   switch (stage) {
+  case Stage::dilation:
+    return "dilation";
   case Stage::neighbour_frames:
     return "neighbour frames";
   case Stage::bandwidths:
@@ -270,32 +272,40 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 /// The pixels (u0 + a k, v0 + b k) of a grid-sized array as an array of their own.
 template <typename T>
 void
-subsample(const std::vector<T>& from, int width, int height, int k, int u0, int v0, std::vector<T>& to)
+subsample(const std::vector<T>& from, int width, int height, int k, int u0, int v0, std::vector<T>& to, int threads)
 {
   const int w = (width - u0 + k - 1) / k, h = (height - v0 + k - 1) / k;
   to.resize(static_cast<std::size_t>(w) * h);
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
   for (int b = 0; b < h; ++b)
     for (int a = 0; a < w; ++a)
       to[static_cast<std::size_t>(b) * w + a] = from[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k];
 }
 
 void
-subsample(const Grid& from, int k, int u0, int v0, Grid& to)
+subsample(const Grid& from, int k, int u0, int v0, Grid& to, int threads)
 {
   to.width = (from.width - u0 + k - 1) / k;
   to.height = (from.height - v0 + k - 1) / k;
-  subsample(from.x, from.width, from.height, k, u0, v0, to.x);
-  subsample(from.y, from.width, from.height, k, u0, v0, to.y);
-  subsample(from.z, from.width, from.height, k, u0, v0, to.z);
-  subsample(from.valid, from.width, from.height, k, u0, v0, to.valid);
+  subsample(from.x, from.width, from.height, k, u0, v0, to.x, threads);
+  subsample(from.y, from.width, from.height, k, u0, v0, to.y, threads);
+  subsample(from.z, from.width, from.height, k, u0, v0, to.z, threads);
+  subsample(from.valid, from.width, from.height, k, u0, v0, to.valid, threads);
 }
 } // namespace
 
 int
 automaticDilation(const Grid& frame)
 {
+  return detail::automaticDilation(frame, 1);
+}
+
+int
+detail::automaticDilation(const Grid& frame, int threads)
+{
   const int lag = std::clamp((8 * frame.width + 320) / 640, 2, 8);
-  const NoiseCorrelation c = estimateNoiseCorrelation(frame);
+  const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, 4, threads);
   const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
   return far > 0.0f && near < 0.5f * far ? std::clamp((2 * frame.width + 320) / 640, 2, 4) : 1;
 }
@@ -308,52 +318,67 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
+  // Checked before anything runs with parameters.threads threads (OpenMP crashes on absurd counts).
+  parameters.validate();
   const Grid& input = *frames[center];
   const bool empty = input.countValid() == 0;
   int k = parameters.dilation;
+  StageTracker split(workspace.observer, 0);
   if (k == 0) {
+    split.start(Stage::dilation);
     // Automatic: contiguous windows unless every phase still holds the windows, and nothing to
     // estimate in a frame without a valid point (runContiguous says so).
     const int needed = std::max({parameters.search_window, parameters.patch_size, parameters.normal_window,
                                  parameters.normal_presmooth_window});
-    k = empty ? 1 : automaticDilation(input);
+    k = empty ? 1 : detail::automaticDilation(input, detail::resolveThreads(parameters.threads));
     if (input.width / k < needed || input.height / k < needed)
       k = 1;
   }
   if (k <= 1 || empty) {
+    split.stop();
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
+  split.start(Stage::dilation);
   // The dilated passes: each phase (u mod k, v mod k) of the frames is a grid of its own whose
   // neighbours are k pixels apart, filtered with contiguous windows.
   FilterParameters coarse = parameters;
   coarse.dilation = 1;
   coarse.iterations = std::max(1, parameters.iterations - 1);
-  Grid result;
-  detail::copyGrid(input, result, detail::resolveThreads(parameters.threads));
-  std::vector<Grid> sub(frames.size());
+  const int threads = detail::resolveThreads(parameters.threads);
+  // Kept in the workspace: the next run on frames of this size allocates nothing here.
+  Grid& result = workspace.merged;
+  detail::copyGrid(input, result, threads);
+  std::vector<Grid>& sub = workspace.phase_frames;
+  sub.resize(frames.size());
   std::vector<const Grid*> sub_frames(frames.size());
   std::vector<unsigned char> sub_active;
-  Workspace phase;
+  workspace.phase.resize(1);
+  Workspace& phase = workspace.phase.front();
   phase.observer = workspace.observer;
   for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
     for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
       for (std::size_t f = 0; f < frames.size(); ++f) {
         if (!frames[f] || frames[f]->width != input.width || frames[f]->height != input.height) {
+          split.stop();
           runContiguous(frames, center, parameters, viewpoint, active, workspace); // reports the size error
           return;
         }
-        subsample(*frames[f], k, u0, v0, sub[f]);
+        subsample(*frames[f], k, u0, v0, sub[f], threads);
         sub_frames[f] = &sub[f];
       }
       if (!active.empty())
-        subsample(active, input.width, input.height, k, u0, v0, sub_active);
+        subsample(active, input.width, input.height, k, u0, v0, sub_active, threads);
+      split.stop();
       try {
         runContiguous(sub_frames, center, coarse, viewpoint, sub_active, phase);
       } catch (const UnfilterableFrame&) {
+        split.start(Stage::dilation);
         continue; // this phase keeps its points
       }
+      split.start(Stage::dilation);
       const Grid& out = phase.run.output;
+#pragma omp parallel for schedule(static) num_threads(threads)
       for (int b = 0; b < out.height; ++b)
         for (int a = 0; a < out.width; ++a) {
           const std::size_t from = static_cast<std::size_t>(b) * out.width + a;
@@ -363,8 +388,9 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
           result.z[to] = out.z[from];
         }
     }
+  split.stop();
   if (parameters.iterations <= 1) {
-    workspace.run.output = std::move(result);
+    std::swap(workspace.run.output, result);
     workspace.run.bandwidths = phase.run.bandwidths;
     workspace.run.frame_weights = phase.run.frame_weights;
     return;
@@ -426,15 +452,25 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     detail::copyGrid(input, run.output, threads);
 
   // Range of every centre point (the per-point bandwidths are functions of it).
-  auto rangesOf = [&](const Grid& g) {
-    std::vector<float> rho(g.size(), 0.0f);
+  auto rangesInto = [&](const Grid& g, std::vector<float>& rho) {
+    rho.resize(g.size());
     const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(g.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < size; ++i)
-      if (g.valid[i]) {
-        const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
-        rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
-      }
+    const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+    const float* __restrict x = g.x.data();
+    const float* __restrict y = g.y.data();
+    const float* __restrict z = g.z.data();
+    const unsigned char* __restrict valid = g.valid.data();
+    float* __restrict out = rho.data();
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+    for (std::ptrdiff_t i = 0; i < size; ++i) {
+      const float dx = x[i] - vx, dy = y[i] - vy, dz = z[i] - vz;
+      const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      out[i] = valid[i] ? r : 0.0f;
+    }
+  };
+  auto rangesOf = [&](const Grid& g) {
+    std::vector<float> rho;
+    rangesInto(g, rho);
     return rho;
   };
   auto medianRange = [&](const Grid& g, const std::vector<float>& rho) {
@@ -453,7 +489,8 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
   auto estimateFrame = [&](int k, const Grid& g, const NormalField* normals, float rho_median) {
     const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - center) * 7919u;
     if (adaptive) {
-      profiles[k] = estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed, viewpoint);
+      profiles[k] =
+          detail::estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed, viewpoint, threads);
       Bandwidths b;
       b.sigma_s = profiles[k].sigmaAt(rho_median);
       b.mu_d = profiles[k].extentAt(rho_median) * rho_median;
@@ -489,14 +526,26 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 
   std::vector<float>& offsets = workspace.offsets;
   NormalField& normals = workspace.normals;
-  std::vector<std::vector<float>> inverse_d2(count), inverse_s2(count);
+  std::vector<std::vector<float>>& inverse_d2 = workspace.inverse_d2;
+  std::vector<std::vector<float>>& inverse_s2 = workspace.inverse_s2;
+  if (inverse_d2.size() < static_cast<std::size_t>(count))
+    inverse_d2.resize(count), inverse_s2.resize(count);
+  // profile.sigmaAt / extentAt of every point's range into `out`, in blocks by `threads` threads.
+  auto profileMap = [&](const std::vector<float>& xs, const std::vector<float>& ys, const std::vector<float>& rho,
+                        std::vector<float>& out) {
+    out.resize(n);
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n), block = 4096;
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::ptrdiff_t lo = 0; lo < size; lo += block)
+      detail::interpolateProfile(xs, ys, &rho[lo], &out[lo], static_cast<std::size_t>(std::min(block, size - lo)));
+  };
   for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
     const Grid& current = run.output;
     StageTracker stage(observer, iteration);
-    std::vector<float> rho;
+    std::vector<float>& rho = workspace.ranges;
     if (adaptive) {
       stage.start(Stage::bandwidths);
-      rho = rangesOf(current);
+      rangesInto(current, rho);
       estimateFrame(center, current, nullptr, medianRange(current, rho));
     } else {
       stage.start(Stage::normals);
@@ -505,8 +554,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       stage.start(Stage::bandwidths);
       estimateFrame(center, current, &normals, 0.0f);
     }
-    auto gateFor = [&](const std::vector<float>& sig) {
-      std::vector<float> gate;
+    auto gateFor = [&](const std::vector<float>& sig) -> const std::vector<float>& {
+      std::vector<float>& gate = workspace.gate;
+      gate.clear();
       if (parameters.normal_edge_gate > 0.0f) {
         gate.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -524,23 +574,30 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       for (std::size_t i = 0; i < n; ++i)
         sigma[i] = bandwidths[center].similarity;
     } else {
+      std::vector<float>& at = workspace.profile_sigma;
+      profileMap(profiles[center].range, profiles[center].sigma, rho, at);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
-        sigma[i] = current.valid[i] ? parameters.similarity_scale * profiles[center].sigmaAt(rho[i]) : 0.0f;
+        sigma[i] = current.valid[i] ? parameters.similarity_scale * at[i] : 0.0f;
     }
     if (parameters.normal_presmooth_window > 1) {
-      std::vector<float> range_sigma(n);
+      std::vector<float>& range_sigma = workspace.range_sigma;
+      range_sigma.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
-      const std::vector<float> gate = gateFor(sigma);
+      const std::vector<float>& gate = gateFor(sigma);
       stage.start(Stage::presmoothing);
-      const Grid smooth = presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads);
+      // The padded planes of the pre-smoothing are those of the normal fits that follow (not
+      // needed by then).
+      Grid& smooth = workspace.smooth;
+      detail::presmoothAlongRays(current, parameters.normal_presmooth_window, range_sigma, viewpoint, threads, smooth,
+                                 &workspace.normal_planes);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
                                    normals, &workspace.normal_planes);
     } else if (adaptive) {
-      const std::vector<float> gate = gateFor(sigma);
+      const std::vector<float>& gate = gateFor(sigma);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
                                    normals, &workspace.normal_planes);
@@ -567,25 +624,42 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         const float ratio =
             k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
                             (parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded &&
-                             !framesMoved(current, normals, *frames[k])))
-                ? std::max(1.0f, estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k], viewpoint))
+                             !detail::framesMoved(current, normals, *frames[k], threads)))
+                ? std::max(1.0f, detail::estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k],
+                                                                    viewpoint, threads))
                 : 1.0f;
         const bool cross = ratio > 1.0f;
-        if (!(parameters.distance_bandwidth > 0.0f)) {
+        const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
+        std::vector<float>& sig = workspace.profile_sigma;
+        std::vector<float>& ext = workspace.profile_extent;
+        if (own_d || own_s)
+          profileMap(profiles[k].range, profiles[k].sigma, rho, sig);
+        if (own_d) {
+          profileMap(profiles[k].range, profiles[k].extent, rho, ext);
           inverse_d2[k].resize(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-          for (std::size_t i = 0; i < n; ++i) {
-            const float d = parameters.distance_scale * profiles[k].extentAt(rho[i]) * rho[i];
-            const float s = parameters.similarity_scale * ratio * profiles[k].sigmaAt(rho[i]);
-            inverse_d2[k][i] = detail::inverseSquare(cross ? std::sqrt(d * d + 2.0f * s * s) : d);
+          float* __restrict out = inverse_d2[k].data();
+          const float* __restrict e = ext.data();
+          const float* __restrict g = sig.data();
+          const float* __restrict r = rho.data();
+          const float ds = parameters.distance_scale, ss = parameters.similarity_scale * ratio;
+          const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+          for (std::ptrdiff_t i = 0; i < size; ++i) {
+            const float d = ds * e[i] * r[i];
+            const float s = ss * g[i];
+            out[i] = detail::inverseSquareInline(cross ? std::sqrt(d * d + 2.0f * s * s) : d);
           }
           term.inverse_distance2 = &inverse_d2[k];
         }
-        if (!(parameters.similarity_bandwidth > 0.0f)) {
+        if (own_s) {
           inverse_s2[k].resize(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-          for (std::size_t i = 0; i < n; ++i)
-            inverse_s2[k][i] = detail::inverseSquare(parameters.similarity_scale * ratio * profiles[k].sigmaAt(rho[i]));
+          float* __restrict out = inverse_s2[k].data();
+          const float* __restrict g = sig.data();
+          const float ss = parameters.similarity_scale * ratio;
+          const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+          for (std::ptrdiff_t i = 0; i < size; ++i)
+            out[i] = detail::inverseSquareInline(ss * g[i]);
           term.inverse_similarity2 = &inverse_s2[k];
         }
       }

@@ -36,6 +36,35 @@ TEST(BenchTool, NoDirectTimesTheFastPathAndThePeersOnly)
   EXPECT_EQ(r.output.find("\"median_ms\": 0,"), std::string::npos) << r.output;
 }
 
+// The table starts with the default configuration as users run it: static on the VGA frame, then
+// temporal (radius 1) on whole frames with the static filter on its centre frame in the same
+// rounds; --breakdown gives their phases as runFilter reports them, the dilated passes included.
+TEST(BenchTool, DefaultConfigurationsComeFirstWithTheirPhases)
+{
+  const test::CommandResult r = test::runTool("range_nlm_bench", "--config preset --runs 1 --breakdown --json");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::size_t static_row = r.output.find("\"config\": \"static default 9x9/3x3 640x480\"");
+  const std::size_t temporal_row = r.output.find("\"config\": \"temporal default 9x9/3x3 r=1 640x480\"");
+  ASSERT_NE(static_row, std::string::npos) << r.output;
+  ASSERT_NE(temporal_row, std::string::npos) << r.output;
+  EXPECT_LT(static_row, temporal_row);
+  // The first result is the default static filter.
+  const std::size_t first = r.output.find("\"results\": [{\"method\": \"range_nlm fast\", \"config\": \"static default");
+  EXPECT_NE(first, std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"method\": \"range_nlm temporal fast\", \"config\": \"temporal default"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("\"method\": \"range_nlm fast\", \"config\": \"temporal default"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("7x7/5x5"), std::string::npos) << r.output; // no paper configuration
+  EXPECT_NE(r.output.find("\"name\": \"dilation (automatic: estimate, split into phases, merge)\""), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("\"name\": \"normals 7x7 gated\""), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"name\": \"neighbour frames (2)\""), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("preset temporal fast (radius 1) vs 2 x static"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("\"error\""), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("\"median_ms\": 0,"), std::string::npos) << r.output;
+}
+
 TEST(BenchTool, RejectsContradictoryDirectOptions)
 {
   const test::CommandResult r = test::runTool("range_nlm_bench", "--all --no-direct");

@@ -1,11 +1,15 @@
 // The noise-correlation estimate behind the automatic dilation, the dilated passes (each phase
 // filtered as a frame of its own) and the motion test of the guarded cross-frame bandwidths.
+#include "core/internal.h"
+
 #include <range_nlm/core/pipeline.h>
 #include <range_nlm/eval/synthetic_scene.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <random>
 
 using namespace range_nlm;
 
@@ -187,4 +191,143 @@ TEST(Dilation, AutomaticFallsBackToContiguousWindowsWhereAPhaseIsNarrowerThanThe
   FilterParameters forced = automatic;
   forced.dilation = 2;
   EXPECT_THROW(runFilter({&g}, 0, forced, kOrigin, {}), std::invalid_argument);
+}
+
+namespace
+{
+/// Whether two grids hold the same bits in every coordinate and flag.
+bool
+sameBits(const Grid& a, const Grid& b)
+{
+  return a.width == b.width && a.height == b.height && a.valid == b.valid &&
+         std::memcmp(a.x.data(), b.x.data(), a.x.size() * sizeof(float)) == 0 &&
+         std::memcmp(a.y.data(), b.y.data(), a.y.size() * sizeof(float)) == 0 &&
+         std::memcmp(a.z.data(), b.z.data(), a.z.size() * sizeof(float)) == 0;
+}
+} // namespace
+
+// The vectorized interpolation of the noise profile behind the per-point maps gives the bits of
+// sigmaAt / extentAt at every range: below, above and on the bin centres, between them, at 0
+// (invalid points), for profiles of 1 to 9 bins (ranges made strictly increasing, as
+// estimateNoiseProfile leaves them), and for any count of points (blocks and their tails).
+TEST(NoiseProfile, VectorizedInterpolationIsTheScalarOne)
+{
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int bins = 0; bins <= 9; ++bins)
+    for (int trial = 0; trial < 4; ++trial) {
+      NoiseProfile profile;
+      float rho = 0.3f + u(rng);
+      for (int b = 0; b < bins; ++b) {
+        profile.range.push_back(rho);
+        profile.sigma.push_back(0.001f + 0.01f * u(rng));
+        profile.extent.push_back(0.002f + 0.02f * u(rng));
+        rho += trial == 3 ? 0.0f : 0.5f * u(rng); // trial 3: equal ranges
+        if (b > 0)
+          profile.range[b] = std::max(profile.range[b], std::nextafter(profile.range[b - 1], 1e30f));
+      }
+      std::vector<float> at;
+      for (int i = 0; i < 700; ++i)
+        at.push_back(5.0f * u(rng));
+      at.push_back(0.0f);
+      for (float r : profile.range) {
+        at.push_back(r);
+        at.push_back(std::nextafter(r, 0.0f));
+        at.push_back(std::nextafter(r, 1e30f));
+      }
+      std::vector<float> sigma(at.size(), -1.0f), extent(at.size(), -1.0f);
+      detail::interpolateProfile(profile.range, profile.sigma, at.data(), sigma.data(), at.size());
+      detail::interpolateProfile(profile.range, profile.extent, at.data(), extent.data(), at.size());
+      for (std::size_t i = 0; i < at.size(); ++i) {
+        const float s = profile.sigmaAt(at[i]), e = profile.extentAt(at[i]);
+        EXPECT_EQ(std::memcmp(&sigma[i], &s, sizeof(float)), 0)
+            << "bins " << bins << " trial " << trial << " rho " << at[i] << ": " << sigma[i] << " vs " << s;
+        EXPECT_EQ(std::memcmp(&extent[i], &e, sizeof(float)), 0)
+            << "bins " << bins << " trial " << trial << " rho " << at[i] << ": " << extent[i] << " vs " << e;
+      }
+    }
+}
+
+// The noise profile's sampled windows and the noise correlation's lags are evaluated by several
+// threads: the same result as one thread, to the bit.
+TEST(NoiseProfile, EstimatesDoNotDependOnTheThreadCount)
+{
+  SceneOptions o = planeScene("stereo", 160, 120);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  const Grid frame = gridOf(renderSequence(o).front().noisy);
+  const NoiseProfile one = estimateNoiseProfile(frame, 9, 1000, 3, kOrigin);
+  const NoiseCorrelation c1 = estimateNoiseCorrelation(frame);
+  ASSERT_FALSE(one.empty());
+  for (int threads : {2, 3}) {
+    const NoiseProfile many = detail::estimateNoiseProfile(frame, 9, 1000, 3, kOrigin, threads);
+    EXPECT_EQ(many.range, one.range) << threads;
+    EXPECT_EQ(many.sigma, one.sigma) << threads;
+    EXPECT_EQ(many.extent, one.extent) << threads;
+    const NoiseCorrelation cn = detail::estimateNoiseCorrelation(frame, 4, threads);
+    EXPECT_EQ(cn.scale, c1.scale) << threads;
+    EXPECT_EQ(cn.samples, c1.samples) << threads;
+    EXPECT_EQ(detail::automaticDilation(frame, threads), automaticDilation(frame));
+  }
+}
+
+// The default configuration on a frame with correlated noise, holes and borders, which takes the
+// automatic dilated passes: the same bits with 1, 2 and 3 threads, and again when the workspace
+// (pre-smoothed copy, gates, maps, the phases' frames and workspace) is reused for a second frame
+// and then the first again.
+TEST(Dilation, DefaultRunIsTheSameForAnyThreadCountAndAReusedWorkspace)
+{
+  SceneOptions o = planeScene("stereo", 320, 240);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  o.frames = 2;
+  const auto sequence = renderSequence(o);
+  const Grid first = gridOf(sequence[0].noisy), second = gridOf(sequence[1].noisy);
+  ASSERT_EQ(automaticDilation(first), 2);
+  FilterParameters p = FilterParameters::recommended();
+  p.threads = 1;
+  const FilterRun reference = runFilter({&first}, 0, p, kOrigin, {});
+  const FilterRun other = runFilter({&second}, 0, p, kOrigin, {});
+  EXPECT_FALSE(sameBits(reference.output, first)); // it moved points
+  for (int threads : {1, 2, 3}) {
+    p.threads = threads;
+    Workspace workspace;
+    for (const Grid* g : {&first, &second, &first}) {
+      runFilter({g}, 0, p, kOrigin, {}, workspace);
+      EXPECT_TRUE(sameBits(workspace.run.output, g == &first ? reference.output : other.output))
+          << threads << " threads";
+    }
+  }
+}
+
+// The temporal filter's motion test and frame-to-frame noise ratio run on several threads: the
+// same answers as one thread; and the temporal default (radius 1, guarded cross-frame bandwidths,
+// automatic dilation) gives the same bits with 1, 2 and 3 threads, with holes and borders.
+TEST(FramesMoved, MotionTestNoiseRatioAndTemporalRunDoNotDependOnTheThreadCount)
+{
+  SceneOptions o = planeScene("stereo", 320, 240, 3);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  const auto seq = renderSequence(o);
+  const Grid a = gridOf(seq[1].noisy), b = gridOf(seq[0].noisy), c = gridOf(seq[2].noisy);
+  const NormalField n = estimateNormals(a, 7, kOrigin, 1);
+  const NoiseProfile profile = estimateNoiseProfile(b, 9, 1000, 7, kOrigin);
+  Grid closer = b;
+  for (std::size_t i = 0; i < closer.size(); ++i)
+    closer.z[i] -= 0.04f;
+  const float ratio = estimateTemporalNoiseRatio(a, n, b, profile, kOrigin);
+  EXPECT_GT(ratio, 0.0f);
+  for (int threads : {2, 3}) {
+    EXPECT_EQ(detail::framesMoved(a, n, b, threads), framesMoved(a, n, b)) << threads;
+    EXPECT_EQ(detail::framesMoved(a, n, closer, threads), framesMoved(a, n, closer)) << threads;
+    EXPECT_EQ(detail::estimateTemporalNoiseRatio(a, n, b, profile, kOrigin, threads), ratio) << threads;
+  }
+  FilterParameters p = FilterParameters::recommended();
+  p.threads = 1;
+  const FilterRun one = runFilter({&b, &a, &c}, 1, p, kOrigin, {});
+  EXPECT_FALSE(sameBits(one.output, a));
+  for (int threads : {2, 3}) {
+    p.threads = threads;
+    EXPECT_TRUE(sameBits(runFilter({&b, &a, &c}, 1, p, kOrigin, {}).output, one.output)) << threads << " threads";
+  }
 }

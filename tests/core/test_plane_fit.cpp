@@ -421,6 +421,14 @@ TEST(PlaneFit, WindowMomentsMatchTheRowKernelOverAllOffsets)
               EXPECT_NEAR(g, e, 1e-6f + 1e-5f * std::fabs(e)) << "r " << r << " pass " << pass << " row " << v
                                                                 << " moment " << k << " centre " << c;
             }
+          if (pass == 1) {
+            // The range gate alone (no first normals: a null n0x) skips the plane test, which
+            // n0 = 0 passes for every neighbour: the same sums exactly.
+            std::vector<float> range_only(10 * width, -1.0f);
+            kernels->window_moments(&x[c0], &y[c0], &z[c0], &f[c0], &rho[c0], stride, r, gate.data(), nullptr,
+                                    nullptr, nullptr, 1.0f, width, range_only.data());
+            EXPECT_EQ(range_only, got) << "r " << r << " row " << v;
+          }
           if (pass == 0) {
             // No gate at all (a null gate, no ranges, no first normals): the same sums exactly.
             std::vector<float> ungated(10 * width, -1.0f);

@@ -202,6 +202,7 @@ double
 stageStart(Stage stage)
 {
   switch (stage) {
+  case Stage::dilation:
   case Stage::neighbour_frames:
   case Stage::bandwidths:
     return 0.0;

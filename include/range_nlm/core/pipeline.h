@@ -193,10 +193,14 @@ FilterRun
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active);
 
-/// The phases of runFilter. neighbour_frames runs once per call, the others once per iteration,
-/// in this order.
+/// The phases of runFilter. dilation and neighbour_frames run once per call, the others once per
+/// iteration, in this order. With a dilation k > 1 the phases of every pass are reported: each of
+/// the k^2 dilated passes (on frames of 1/k^2 the points) reports its own, iteration 0.
 enum class Stage
 {
+  /// Dilated passes (FilterParameters::dilation): the automatic dilation's noise correlation
+  /// estimate, the split of the frames into their k^2 phases and the merge of the results.
+  dilation,
   /// Bandwidths (or noise profiles) of the temporal neighbour frames.
   neighbour_frames,
   /// The current frame's noise profile (range-adaptive model) or bandwidths (global model).
@@ -215,7 +219,7 @@ enum class Stage
   displacement
 };
 /// Number of Stage values.
-constexpr int kStageCount = 8;
+constexpr int kStageCount = 9;
 /// A short name of the stage ("normals", "offsets", ...).
 const char*
 toString(Stage stage);
@@ -243,6 +247,16 @@ struct Workspace
   FilterRun run;
   NormalField normals;
   std::vector<float> offsets, sigma, limit;
+  /// Per-point ranges, profile values and per-frame bandwidth maps of a run.
+  std::vector<float> ranges, profile_sigma, profile_extent, range_sigma, gate;
+  std::vector<std::vector<float>> inverse_d2, inverse_s2;
+  /// The pre-smoothed copy the normals are fitted on.
+  Grid smooth;
+  /// Dilated passes: the frames of one phase, the merged result of all phases, and the
+  /// workspace of the phases' runs (one element once used).
+  std::vector<Grid> phase_frames;
+  Grid merged;
+  std::vector<Workspace> phase;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// If set, told where each phase of a run begins and ends. Not owned.

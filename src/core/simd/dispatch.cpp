@@ -26,7 +26,8 @@ bool
 cpuRunsAvx2()
 {
 #if defined(__x86_64__)
-  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                           std::getenv("RANGE_NLM_NO_AVX2") == nullptr;
   return avx2;
 #else
   return false;

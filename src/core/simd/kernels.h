@@ -101,7 +101,8 @@ struct PlaneFitKernels
   /// kept in registers over all offsets. x, y, z, f, rho point to the row's first centre in a
   /// padded SoA grid of row stride `stride` (border >= r on every side); gate, n0x, n0y, n0z and
   /// range_on as for RowKernels::moments. A null gate means no gate (every valid neighbour
-  /// counts); rho, n0x, n0y, n0z and range_on are then not read.
+  /// counts); rho, n0x, n0y, n0z and range_on are then not read. A null n0x means no plane gate
+  /// (as n0 = 0), range_on = 0 no range gate: the test that is off is skipped.
   void (*window_moments)(const float* x, const float* y, const float* z, const float* f, const float* rho,
                          std::ptrdiff_t stride, int r, const float* gate, const float* n0x, const float* n0y,
                          const float* n0z, float range_on, int width, float* acc);
@@ -118,7 +119,8 @@ struct SimdKernels
 /// environment turns them off (for comparisons).
 bool
 cpuRunsAvx512();
-/// Whether this CPU runs the AVX2 + FMA kernels.
+/// Whether this CPU runs the AVX2 + FMA kernels; RANGE_NLM_NO_AVX2 in the environment turns them
+/// off (with RANGE_NLM_NO_AVX512 too, the baseline build runs; for comparisons).
 bool
 cpuRunsAvx2();
 
