@@ -55,22 +55,6 @@ findProgram(const std::string& name)
   return "";
 }
 
-/// A TCP port on 127.0.0.1 that nothing listens on now.
-int
-freePort()
-{
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address = {};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof address;
-  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
-      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0)
-    throw std::runtime_error("cannot find a free port on 127.0.0.1");
-  ::close(fd);
-  return ntohs(address.sin_port);
-}
-
 /// The last lines of a log file.
 std::string
 tail(const fs::path& file, std::size_t lines = 15)
@@ -171,8 +155,8 @@ private:
     const fs::path conf = dir_ / "slurm.conf";
     std::ofstream(conf) << "ClusterName=rnlmtest\n"
                         << "SlurmctldHost=localhost(127.0.0.1)\n"
-                        << "SlurmctldPort=" << freePort() << "\n"
-                        << "SlurmdPort=" << freePort() << "\n"
+                        << "SlurmctldPort=" << test::freePort() << "\n"
+                        << "SlurmdPort=" << test::freePort() << "\n"
                         << "SlurmUser=" << user_name << "\nSlurmdUser=" << user_name << "\n"
                         << "AuthType=auth/munge\nCredType=cred/munge\n"
                         << "AuthInfo=socket=" << socket.string() << "\n"

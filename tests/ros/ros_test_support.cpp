@@ -1,4 +1,5 @@
 #include "ros_test_support.h"
+#include "test_support.h"
 
 #include <chrono>
 #include <cmath>
@@ -24,23 +25,6 @@ namespace test
 {
 namespace
 {
-
-/// A TCP port on 127.0.0.1 that nobody listens on right now.
-int
-freePort()
-{
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  address.sin_port = 0;
-  socklen_t length = sizeof address;
-  if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
-      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) != 0)
-    throw std::runtime_error("cannot find a free port on 127.0.0.1");
-  ::close(fd);
-  return ntohs(address.sin_port);
-}
 
 /// Something accepts connections on 127.0.0.1:port.
 bool

@@ -12,6 +12,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <limits>
 #include <random>
@@ -223,6 +226,23 @@ punchHoles(pcl::PointCloud<pcl::PointXYZ>& cloud, double p, std::uint64_t seed)
       q.x = q.y = q.z = std::numeric_limits<float>::quiet_NaN();
       cloud.is_dense = false;
     }
+}
+
+int
+freePort()
+{
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  const bool found = fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0 &&
+                     ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) == 0;
+  if (fd >= 0)
+    ::close(fd);
+  if (!found)
+    throw std::runtime_error("cannot find a free port on 127.0.0.1");
+  return ntohs(address.sin_port);
 }
 
 } // namespace test

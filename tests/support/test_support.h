@@ -96,5 +96,10 @@ jsonLine(const std::string& output);
 void
 punchHoles(pcl::PointCloud<pcl::PointXYZ>& cloud, double p, std::uint64_t seed);
 
+/// A TCP port on 127.0.0.1 that nothing listens on now (bound to port 0 and released), for the
+/// tests that start real servers (rosmaster, slurmctld, slurmd). Throws std::runtime_error.
+int
+freePort();
+
 } // namespace test
 } // namespace range_nlm
