@@ -110,6 +110,9 @@ correlationText(const Cloud& c)
   s << "second-difference scale by lag (mm):";
   for (float v : n.scale)
     s << " " << fixed(1000 * v, 2);
+  s << "; in pixel footprints:";
+  for (float v : n.scale_in_footprints)
+    s << " " << fixed(v, 2);
   s << "; automatic dilation " << automaticDilation(g);
   return s.str();
 }

@@ -420,6 +420,22 @@ detail::estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, 
   return 1.4826f * 0.70710678f * medianOf(std::move(ratios));
 }
 
+namespace
+{
+/// The mean of the smallest 80 % of `values` (reordered): robust to depth edges, and unlike a
+/// median not stuck on the steps of a quantized depth unit.
+float
+robustMean(std::vector<float>& values)
+{
+  const std::size_t keep = values.size() * 4 / 5;
+  std::nth_element(values.begin(), values.begin() + keep, values.end());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < keep; ++i)
+    sum += values[i];
+  return static_cast<float>(sum / keep);
+}
+} // namespace
+
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step)
 {
@@ -436,38 +452,39 @@ detail::estimateNoiseCorrelation(const Grid& grid, int step, int threads)
   (void)threads;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(detail::resolveThreads(threads))
   for (int lag = 1; lag <= 8; ++lag) {
-    std::vector<float> values;
-    auto add = [&](std::size_t a, std::size_t c, std::size_t b) {
+    std::vector<float> values, relative;
+    // `lateral` is x (along rows) or y (along columns): its ratio to z is the ray's direction, so
+    // the centre's pixel footprint is z_c times the angle between the outer rays over 2 lag.
+    auto add = [&](std::size_t a, std::size_t c, std::size_t b, const std::vector<float>& lateral) {
       if (!(grid.valid[a] && grid.valid[b] && grid.valid[c]))
         return;
       const float za = grid.z[a], zb = grid.z[b], zc = grid.z[c];
       if (!(za > 0.0f && zb > 0.0f && zc > 0.0f))
         return;
       const float d2 = 1.0f / za - 2.0f / zc + 1.0f / zb;
-      values.push_back(std::fabs(d2) * zc * zc);
+      const float value = std::fabs(d2) * zc * zc;
+      values.push_back(value);
+      const float footprint = std::fabs(lateral[b] / zb - lateral[a] / za) * zc / (2.0f * lag);
+      if (footprint > 0.0f)
+        relative.push_back(value / footprint);
     };
     for (int v = 0; v < h; v += step)
       for (int u = lag; u + lag < w; u += step) {
         const std::size_t c = static_cast<std::size_t>(v) * w + u;
-        add(c - lag, c, c + lag);
+        add(c - lag, c, c + lag, grid.x);
       }
     for (int v = lag; v + lag < h; v += step)
       for (int u = 0; u < w; u += step) {
         const std::size_t c = static_cast<std::size_t>(v) * w + u;
-        add(c - static_cast<std::size_t>(lag) * w, c, c + static_cast<std::size_t>(lag) * w);
+        add(c - static_cast<std::size_t>(lag) * w, c, c + static_cast<std::size_t>(lag) * w, grid.y);
       }
     if (lag == 1)
       result.samples = values.size();
+    if (relative.size() >= 64)
+      result.scale_in_footprints[lag - 1] = robustMean(relative);
     if (values.size() < 64)
       continue; // scale stays 0
-    // The mean of the smallest 80 %: robust to depth edges, and unlike a median not stuck on
-    // the steps of a quantized depth unit.
-    const std::size_t keep = values.size() * 4 / 5;
-    std::nth_element(values.begin(), values.begin() + keep, values.end());
-    double sum = 0.0;
-    for (std::size_t i = 0; i < keep; ++i)
-      sum += values[i];
-    result.scale[lag - 1] = static_cast<float>(sum / keep);
+    result.scale[lag - 1] = robustMean(values);
   }
   return result;
 }

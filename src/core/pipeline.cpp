@@ -307,7 +307,9 @@ detail::automaticDilation(const Grid& frame, int threads)
   const int lag = std::clamp((8 * frame.width + 320) / 640, 2, 8);
   const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, 4, threads);
   const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
-  return far > 0.0f && near < 0.5f * far ? std::clamp((2 * frame.width + 320) / 640, 2, 4) : 1;
+  const int k = far > 0.0f && near < 0.5f * far ? std::clamp((2 * frame.width + 320) / 640, 2, 4) : 1;
+  // Strong noise: more than 3.25 pixel footprints at half the reference lag.
+  return c.scale_in_footprints[lag / 2 - 1] > 3.25f ? 2 * k : k;
 }
 
 void

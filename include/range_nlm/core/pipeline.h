@@ -120,6 +120,10 @@ struct NoiseCorrelation
   std::array<float, 8> scale{};
   /// Pixel triples sampled per lag.
   std::size_t samples = 0;
+  /// The same scale with each triple's difference divided by the pixel footprint at its centre
+  /// (the distance between neighbouring pixels' rays at the centre's depth): how many pixel
+  /// footprints the noise spans, a number; 0 where fewer than 64 triples qualified.
+  std::array<float, 8> scale_in_footprints{};
 };
 
 /// NoiseCorrelation of a frame from the valid triples of every `step`-th row and column.
@@ -127,13 +131,16 @@ NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step = 4);
 
 /// The dilation FilterParameters::dilation = 0 (automatic) gives a frame. With the reference lag
-/// R = 8 pixels per 640 columns (rounded, in [2, 8]): if the variance of the second differences
-/// at lag 1 is less than half of that at lag R (estimateNoiseCorrelation), the noise is
-/// correlated over several pixels and the dilation is 2 per 640 columns (rounded, in [2, 4]: 2
-/// in a VGA frame, 4 at 1280 columns and more); else 1. Both scale with the width because a
-/// frame's details span more pixels the more pixels it has: a dilated 3 x 3 patch must stay
-/// small against them, and at long lags a small frame's curvature and edges, not its noise,
-/// dominate the differences.
+/// R = 8 pixels per 640 columns (rounded, in [2, 8]) and the scales of estimateNoiseCorrelation:
+/// - if the variance of the second differences at lag 1 is less than half of that at lag R, the
+///   noise is correlated over several pixels and the dilation is 2 per 640 columns (rounded, in
+///   [2, 4]: 2 in a VGA frame, 4 at 1280 columns and more); else 1;
+/// - if the noise is strong, i.e. the scale at lag R / 2 exceeds 3.25 pixel footprints
+///   (scale_in_footprints), that dilation is doubled: detail at the pixel scale does not survive
+///   such noise, and the dilated passes reach twice as far at the same cost.
+/// The correlation test scales with the width because a frame's details span more pixels the
+/// more pixels it has: a dilated 3 x 3 patch must stay small against them, and at long lags a
+/// small frame's curvature and edges, not its noise, dominate the differences.
 int
 automaticDilation(const Grid& frame);
 
