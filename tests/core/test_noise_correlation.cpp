@@ -79,6 +79,41 @@ TEST(NoiseCorrelation, AutomaticDilationIsOneForIndependentNoiseAndGrowsWithTheW
   EXPECT_EQ(automaticDilation(empty), 1);
 }
 
+TEST(NoiseCorrelation, ScaleInFootprintsIsTheScaleOverTheDistanceBetweenRays)
+{
+  // A fronto-parallel plane: every pixel's footprint is z / fx, the same at every lag.
+  const SceneOptions o = planeScene("kinect", 320, 240);
+  const NoiseCorrelation c = estimateNoiseCorrelation(gridOf(renderSequence(o).front().noisy));
+  const double footprint = o.plane_depth / o.fx;
+  for (int lag = 1; lag <= 8; ++lag) {
+    ASSERT_GT(c.scale[lag - 1], 0.0f) << lag;
+    EXPECT_NEAR(c.scale_in_footprints[lag - 1] * footprint / c.scale[lag - 1], 1.0, 0.03) << lag;
+  }
+  // Twice the noise, twice the footprints.
+  SceneOptions louder = o;
+  louder.noise_scale = 2.0;
+  const NoiseCorrelation d = estimateNoiseCorrelation(gridOf(renderSequence(louder).front().noisy));
+  EXPECT_NEAR(d.scale_in_footprints[3] / c.scale_in_footprints[3], 2.0, 0.1);
+  // A frame without valid points has nothing to measure.
+  EXPECT_EQ(estimateNoiseCorrelation(Grid(64, 48)).scale_in_footprints[3], 0.0f);
+}
+
+TEST(NoiseCorrelation, StrongNoiseDoublesTheAutomaticDilation)
+{
+  // Independent noise of about 1.7 pixel footprints at 1.5 m: contiguous windows; three times
+  // as strong: dilation 2.
+  SceneOptions iid = planeScene("kinect", 640, 480);
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 1);
+  iid.noise_scale = 3.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 2);
+  // Correlated noise: 2 at 640 columns, 4 when strong.
+  SceneOptions stereo = planeScene("stereo", 640, 480);
+  stereo.stereo_correlation_length = 6.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 2);
+  stereo.noise_scale = 4.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 4);
+}
+
 TEST(Dilation, EachPhaseIsFilteredAsAFrameOfItsOwn)
 {
   SceneOptions o = planeScene("stereo", 61, 47); // odd sizes: phases of different sizes
