@@ -63,7 +63,12 @@ enum class Displacement
   /// p' = p - (h / (n . v)) v with v the unit line of sight from the sensor origin: the point lands
   /// on the same offset plane as with `normal`, but stays on its own camera ray (depth sensors
   /// measure only along the ray). The factor 1/(n . v) is clamped at grazing angles.
-  line_of_sight
+  line_of_sight,
+  /// line_of_sight where other frames take part (temporal filter), normal for a frame filtered
+  /// alone (the default). Along its normal a point keeps the part of its own noise that lies
+  /// along the surface's tilt against the normal estimate; filtered alone that part is as noisy
+  /// as its neighbours, but with other frames averaged in it is what is left.
+  automatic
 };
 
 /// Parameters of NonLocalMeansFilter / TemporalNonLocalMeansFilter. Every setter of the filters
@@ -141,8 +146,8 @@ struct FilterParameters
   /// (global); 0 = unlimited (the paper). A denoiser never needs to move a point by many noise
   /// sigmas; larger moves come from normals that straddle a depth edge. >= 0.
   float max_displacement = 0.0f;
-  /// Direction of the displacement; see Displacement.
-  Displacement displacement = Displacement::normal;
+  /// Direction of the displacement; see Displacement. Default automatic (paper: normal).
+  Displacement displacement = Displacement::automatic;
   /// Similarity bandwidth of the other frames' patches (temporal filter, range-adaptive model
   /// with automatic s); see CrossFrameBandwidth. Default guarded (paper: spatial).
   CrossFrameBandwidth cross_frame_bandwidth = CrossFrameBandwidth::guarded;

@@ -92,8 +92,9 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
   if (readParameter(node, "direct", flag, "a boolean") && flag)
     p.evaluation = range_nlm::Evaluation::direct;
   flag = false;
-  if (readParameter(node, "line_of_sight", flag, "a boolean") && flag)
-    p.displacement = range_nlm::Displacement::line_of_sight;
+  // Unset: automatic (along the line of sight whenever other frames take part).
+  if (readParameter(node, "line_of_sight", flag, "a boolean"))
+    p.displacement = flag ? range_nlm::Displacement::line_of_sight : range_nlm::Displacement::normal;
   readParameter(node, "temporal_radius", settings.temporal_radius, "an integer");
   bool causal = true, recursive = false;
   readParameter(node, "causal", causal, "a boolean");

@@ -131,7 +131,7 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
              float min_cos)
 {
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(grid.size());
-  if (displacement == Displacement::normal) {
+  if (displacement != Displacement::line_of_sight) { // automatic: one frame here
     const auto move = limit.empty() ? detail::moveAlongNormals<false> : detail::moveAlongNormals<true>;
     const std::ptrdiff_t block = 4096;
 #pragma omp parallel for schedule(static)
@@ -684,8 +684,10 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     } else {
       limit.clear();
     }
-    applyOffsets(run.output, normals, offsets, parameters.displacement, viewpoint, limit,
-                 parameters.line_of_sight_min_cos);
+    const Displacement displacement = parameters.displacement != Displacement::automatic ? parameters.displacement
+                                      : std::count(usable.begin(), usable.end(), true) > 1 ? Displacement::line_of_sight
+                                                  : Displacement::normal;
+    applyOffsets(run.output, normals, offsets, displacement, viewpoint, limit, parameters.line_of_sight_min_cos);
   }
 }
 

@@ -170,6 +170,40 @@ TEST(Dilation, EachPhaseIsFilteredAsAFrameOfItsOwn)
       EXPECT_EQ(two.output.z[i], expected_two.output.z[i]) << i;
 }
 
+TEST(Displacement, AutomaticIsAlongTheLineOfSightWithOtherFramesAndAlongTheNormalAlone)
+{
+  SceneOptions o = planeScene("kinect", 80, 60, 3);
+  o.scene = SceneType::boxes;
+  const auto seq = renderSequence(o);
+  std::vector<Grid> grids;
+  for (const auto& f : seq)
+    grids.push_back(gridOf(f.noisy));
+  const std::vector<const Grid*> three{&grids[0], &grids[1], &grids[2]}, one{&grids[1]};
+  auto run = [&](const std::vector<const Grid*>& frames, int center, Displacement d) {
+    FilterParameters p = FilterParameters::recommended();
+    p.displacement = d;
+    return runFilter(frames, center, p, kOrigin, {}).output;
+  };
+  // Bit for bit (invalid points are NaN, which == would call different).
+  auto same = [](const Grid& a, const Grid& b) {
+    auto bits = [](const std::vector<float>& u, const std::vector<float>& v) {
+      return u.size() == v.size() && std::memcmp(u.data(), v.data(), u.size() * sizeof(float)) == 0;
+    };
+    return bits(a.x, b.x) && bits(a.y, b.y) && bits(a.z, b.z);
+  };
+  ASSERT_EQ(FilterParameters().displacement, Displacement::automatic);
+  EXPECT_EQ(FilterParameters::paper().displacement, Displacement::normal);
+  const Grid temporal = run(three, 1, Displacement::automatic);
+  EXPECT_TRUE(same(temporal, run(three, 1, Displacement::line_of_sight)));
+  EXPECT_FALSE(same(temporal, run(three, 1, Displacement::normal)));
+  const Grid alone = run(one, 0, Displacement::automatic);
+  EXPECT_TRUE(same(alone, run(one, 0, Displacement::normal)));
+  EXPECT_FALSE(same(alone, run(one, 0, Displacement::line_of_sight)));
+  // An all-NaN neighbour takes no part: the frame is filtered as alone.
+  Grid empty(80, 60);
+  EXPECT_TRUE(same(run({&grids[1], &empty}, 0, Displacement::automatic), alone));
+}
+
 TEST(Dilation, IsRefusedBelowZeroAndPaperKeepsContiguousWindows)
 {
   FilterParameters p;

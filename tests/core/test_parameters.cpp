@@ -32,7 +32,7 @@ TEST(Parameters, DefaultsAreValidAndDocumentedValues)
   EXPECT_EQ(p.iterations, 2);
   EXPECT_EQ(p.normal_window, 7);
   EXPECT_EQ(p.bandwidth_model, range_nlm::BandwidthModel::range_adaptive);
-  EXPECT_EQ(p.displacement, range_nlm::Displacement::normal);
+  EXPECT_EQ(p.displacement, range_nlm::Displacement::automatic);
   EXPECT_EQ(p.distance_bandwidth, FilterParameters::automatic);
   EXPECT_EQ(p.similarity_bandwidth, FilterParameters::automatic);
   const FilterParameters paper = FilterParameters::paper();

@@ -58,7 +58,7 @@ TEST_F(DenoiseTool, HelpListsEveryOptionWithDefaults)
   EXPECT_EQ(r.status, 0);
   for (const char* option : {"--search-window", "--patch", "--iterations", "--threads", "--distance-bandwidth",
                              "--similarity-bandwidth", "--seed", "--input-dir", "--output-dir", "--temporal-radius",
-                             "--causal", "--pass", "--preset"})
+                             "--causal", "--pass", "--preset", "--line-of-sight", "--along-normal"})
     EXPECT_NE(r.output.find(option), std::string::npos) << option;
   EXPECT_NE(r.output.find("(=42)"), std::string::npos);
 }
@@ -134,7 +134,9 @@ TEST_F(DenoiseTool, UsageErrorsExitWithTwo)
   for (const std::string& args : {std::string("--search-window 6 ") + path("in/a.pcd") + " " + path("o.pcd"),
                                   std::string("--patch 0 ") + path("in/a.pcd") + " " + path("o.pcd"),
                                   std::string("--bogus"), std::string(""), path("in/a.pcd"),
-                                  std::string("--preset fancy ") + path("in/a.pcd") + " " + path("o.pcd")}) {
+                                  std::string("--preset fancy ") + path("in/a.pcd") + " " + path("o.pcd"),
+                                  std::string("--line-of-sight --along-normal ") + path("in/a.pcd") + " " +
+                                      path("o.pcd")}) {
     const Result r = test::runDenoise(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;

@@ -83,10 +83,12 @@ addFilterOptions(po::options_description& options)
     ("similarity-bandwidth", po::value<float>(), "s in cloud units [default: automatic]")
     ("seed", po::value<std::uint64_t>()->default_value(42), "seed of the bandwidth sample")
     ("normal-window", po::value<int>(), ("odd side of the normal-estimation neighbourhood [preset: " + std::to_string(d.normal_window) + "]").c_str())
-    ("dilation", po::value<int>(), "spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is spatially correlated, 1 for independent noise), 1 = contiguous windows [preset: 0; paper: 1]")
+    ("dilation", po::value<int>(), "spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is spatially correlated or strong, 1 otherwise), 1 = contiguous windows [preset: 0; paper: 1]")
     ("cross-frame", po::value<std::string>(), "temporal runs: s and d of the other frames: 'guarded' (raised to their frame-to-frame noise unless the frame moved), 'temporal' (always raised: a static camera), 'spatial' (their own spatial noise, the paper) [preset: guarded; paper: spatial]")
     ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
-    ("line-of-sight", "move points along their camera ray instead of the normal (depth sensors)");
+    ("line-of-sight", "move points along their camera ray instead of the normal, also when filtered alone "
+                      "(default: along the ray in temporal runs, along the normal otherwise)")
+    ("along-normal", "move points along their normal, also in temporal runs (the paper)");
   // clang-format on
 }
 
@@ -128,8 +130,12 @@ filterParametersFrom(const po::variables_map& vm)
   }
   if (vm.count("direct"))
     p.evaluation = Evaluation::direct;
+  if (vm.count("line-of-sight") && vm.count("along-normal"))
+    throw UsageError("--line-of-sight and --along-normal contradict each other: give one");
   if (vm.count("line-of-sight"))
     p.displacement = Displacement::line_of_sight;
+  if (vm.count("along-normal"))
+    p.displacement = Displacement::normal;
   if ((vm.count("distance-bandwidth") && !(p.distance_bandwidth > 0.0f)) ||
       (vm.count("similarity-bandwidth") && !(p.similarity_bandwidth > 0.0f)))
     throw UsageError("a bandwidth given on the command line must be a positive number (omit it for automatic)");

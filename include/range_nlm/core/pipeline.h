@@ -172,6 +172,7 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
 /// Moves the active points by their offsets: p' = p - h n, or along the line of sight. With
 /// `limit` (size of the grid, may be empty) each displacement is clamped to |p' - p| <= limit[i].
 /// Along the line of sight the ray step uses |cos(normal, ray)| bounded below by min_cos.
+/// Displacement::automatic moves along the normal here (runFilter resolves it by its frames).
 void
 applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
              Displacement displacement, const Viewpoint& viewpoint,
