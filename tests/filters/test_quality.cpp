@@ -30,6 +30,17 @@ smallScene(const char* noise, int frames, std::uint64_t seed)
   return o;
 }
 
+/// The boxes scene at 640 x 480 (the size of the benchmark's scenes).
+SceneOptions
+vgaScene(const char* noise, int frames, std::uint64_t seed)
+{
+  SceneOptions o = smallScene(noise, frames, seed);
+  o.width = 640;
+  o.height = 480;
+  o.fx = o.fy = 525.0;
+  return o;
+}
+
 FrameMetrics
 score(const std::vector<SyntheticFrame>& seq, const FilterParameters& p, std::size_t frames)
 {
@@ -86,11 +97,7 @@ TEST(Quality, LaserGradeNoiseThresholds)
 TEST(Quality, TemporalWindowImprovesOnOneFrame)
 {
   // Three frames of the boxes scene at 640 x 480 with Kinect-like noise.
-  SceneOptions o = smallScene("kinect", 3, 5);
-  o.width = 640;
-  o.height = 480;
-  o.fx = o.fy = 525.0;
-  const auto seq = renderSequence(o);
+  const auto seq = renderSequence(vgaScene("kinect", 3, 5));
   const FrameMetrics one = [&] {
     std::vector<SyntheticFrame> centre{seq[1]};
     return score(centre, FilterParameters::recommended(), 1);
@@ -148,11 +155,7 @@ TEST(Quality, CorrelatedStereoNoiseDilatedDefaultAgainstFastBilateralsBestBalanc
 {
   // Active-stereo-like noise (80 % of its variance in blobs of 4 px) on the boxes scene at
   // 640 x 480 (at 200 x 150 the blobs would span the scene's details).
-  SceneOptions o = smallScene("stereo", 1, 6);
-  o.width = 640;
-  o.height = 480;
-  o.fx = o.fy = 525.0;
-  const auto seq = renderSequence(o);
+  const auto seq = renderSequence(vgaScene("stereo", 1, 6));
   const FrameMetrics input = evaluateFrame(seq[0].truth, seq[0].noisy);
   const FrameMetrics def = score(seq, FilterParameters::recommended(), 1);
   FilterParameters contiguous = FilterParameters::recommended();
@@ -178,10 +181,7 @@ TEST(Quality, StrongIndependentNoiseDilatedDefaultAgainstFastBilateralsBestBalan
 {
   // Twice the Kinect-like noise on the boxes scene at 640 x 480: independent from pixel to pixel
   // but several pixel footprints strong, so the automatic dilation is 2.
-  SceneOptions o = smallScene("kinect", 1, 7);
-  o.width = 640;
-  o.height = 480;
-  o.fx = o.fy = 525.0;
+  SceneOptions o = vgaScene("kinect", 1, 7);
   o.noise_scale = 2.0;
   const auto seq = renderSequence(o);
   const FrameMetrics def = score(seq, FilterParameters::recommended(), 1);
