@@ -369,6 +369,169 @@ detail::framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, 
   return offset > spread;
 }
 
+FrameOffset
+analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint)
+{
+  return detail::analyseFrameChange(a, b, viewpoint, 1);
+}
+
+FrameOffset
+detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads)
+{
+  FrameOffset result;
+  if (a.size() != b.size() || a.width <= 0 || a.height <= 0)
+    return result;
+  const int width = a.width, height = a.height;
+  const std::size_t n = a.size();
+  std::vector<float> rho_a(n), rho_b(n);
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(detail::resolveThreads(threads))
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto range = [&](const Grid& g) {
+      const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
+      return std::sqrt(dx * dx + dy * dy + dz * dz);
+    };
+    rho_a[i] = a.valid[i] ? range(a) : 0.0f;
+    rho_b[i] = b.valid[i] ? range(b) : 0.0f;
+  }
+  // The blocks of framesMoved. Per block: the median difference and its spread, and whether the
+  // block is structured and shows a shift (see the header).
+  const int block = std::max(8, width / 20);
+  const int columns = width / block, rows = height / block;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> medians(static_cast<std::size_t>(columns) * rows, nan), spreads(medians);
+  std::vector<unsigned char> structured(medians.size(), 0), shifted(medians.size(), 0);
+  static const int kShifts[9][2] = {{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}, {2, 0}, {-2, 0}, {0, 2}, {0, -2}};
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> diff;
+#pragma omp for schedule(dynamic, 4)
+    for (int t = 0; t < columns * rows; ++t) {
+      const int v0 = (t / columns) * block, u0 = (t % columns) * block;
+      double deviation[9];
+      bool enough = true;
+      for (int s = 0; s < 9 && enough; ++s) {
+        diff.clear();
+        for (int v = v0; v < v0 + block; ++v) {
+          const int vb = v + kShifts[s][1];
+          if (vb < 0 || vb >= height)
+            continue;
+          for (int u = u0; u < u0 + block; ++u) {
+            const int ub = u + kShifts[s][0];
+            if (ub < 0 || ub >= width)
+              continue;
+            const std::size_t i = static_cast<std::size_t>(v) * width + u, j = static_cast<std::size_t>(vb) * width + ub;
+            if (a.valid[i] && b.valid[j])
+              diff.push_back(rho_b[j] - rho_a[i]);
+          }
+        }
+        if (diff.size() < static_cast<std::size_t>(block * block / 2)) {
+          enough = false;
+          break;
+        }
+        double sum = 0.0;
+        for (float d : diff)
+          sum += d;
+        const double mean = sum / static_cast<double>(diff.size());
+        double absolute = 0.0;
+        for (float d : diff)
+          absolute += std::fabs(d - mean);
+        deviation[s] = absolute / static_cast<double>(diff.size());
+        if (s == 0) {
+          const float m = medianOf(diff);
+          for (float& d : diff)
+            d = std::fabs(d - m);
+          medians[t] = m;
+          spreads[t] = medianOf(diff);
+        }
+      }
+      if (!enough)
+        continue;
+      const double largest = *std::max_element(deviation + 1, deviation + 9);
+      const double smallest = *std::min_element(deviation + 1, deviation + 9);
+      structured[t] = largest > 1.5 * deviation[0];
+      shifted[t] = structured[t] && smallest < 0.8 * deviation[0];
+    }
+  }
+  std::vector<float> offsets, block_spreads;
+  int structured_blocks = 0, shifted_blocks = 0;
+  for (std::size_t t = 0; t < medians.size(); ++t)
+    if (!std::isnan(medians[t])) {
+      offsets.push_back(std::fabs(medians[t]));
+      block_spreads.push_back(spreads[t]);
+      structured_blocks += structured[t];
+      shifted_blocks += shifted[t];
+    }
+  if (offsets.size() < 4 || !(medianOf(offsets) > medianOf(block_spreads)))
+    return result;
+  // Too few blocks to tell a smooth drift (a quadratic: 6 coefficients) from blocks that moved
+  // against each other: motion, as if there were no drift.
+  if (offsets.size() < 24 || (structured_blocks >= 8 && 4 * shifted_blocks >= structured_blocks)) {
+    result.change = FrameChange::motion;
+    return result;
+  }
+  result.change = FrameChange::offset;
+  // A quadratic in the image coordinates (scaled to [-1, 1]) fitted to the blocks' medians,
+  // weighted by 1 / spread^2 and, against outliers (a block on an object that moved), Huber
+  // weights at 2 spreads from the fit, three reweightings. One block's median holds its noise
+  // (under correlated noise, a few blobs' worth); the fit over the frame does not.
+  struct Sample
+  {
+    double x, y, m, spread;
+  };
+  std::vector<Sample> samples;
+  for (std::size_t t = 0; t < medians.size(); ++t)
+    if (!std::isnan(medians[t])) {
+      const int c = static_cast<int>(t) % columns, r = static_cast<int>(t) / columns;
+      samples.push_back(Sample{2.0 * ((c + 0.5) * block) / width - 1.0, 2.0 * ((r + 0.5) * block) / height - 1.0,
+                               medians[t], std::max(static_cast<double>(spreads[t]), 1e-6)});
+    }
+  const auto basis = [](double x, double y) {
+    Eigen::Matrix<double, 6, 1> b;
+    b << 1.0, x, y, x * x, x * y, y * y;
+    return b;
+  };
+  Eigen::Matrix<double, 6, 1> coefficients = Eigen::Matrix<double, 6, 1>::Zero();
+  for (int pass = 0; pass < 4; ++pass) {
+    Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const Sample& q : samples) {
+      const Eigen::Matrix<double, 6, 1> b = basis(q.x, q.y);
+      double w = 1.0 / (q.spread * q.spread);
+      if (pass > 0) {
+        const double r = std::fabs(q.m - coefficients.dot(b));
+        w *= std::min(1.0, 2.0 * q.spread / std::max(r, 1e-12));
+      }
+      normal += w * b * b.transpose();
+      rhs += w * q.m * b;
+    }
+    // A small ridge keeps the fit defined when the blocks line up (e.g. one row of them).
+    normal.diagonal().array() += 1e-9 * std::max(normal.trace(), 1e-30);
+    coefficients = normal.ldlt().solve(rhs);
+  }
+  // A drift is smooth: if the fit leaves the blocks' medians farther from it than their spread
+  // (what `none` allows), whole blocks moved against each other, which is motion.
+  std::vector<float> residuals;
+  for (const Sample& q : samples)
+    residuals.push_back(static_cast<float>(std::fabs(q.m - coefficients.dot(basis(q.x, q.y)))));
+  if (!(medianOf(residuals) <= medianOf(block_spreads))) {
+    result.change = FrameChange::motion;
+    return result;
+  }
+  const Eigen::Matrix<float, 6, 1> c = coefficients.cast<float>();
+  result.range_offset.resize(n);
+  float* __restrict out = result.range_offset.data();
+#pragma omp parallel for schedule(static) num_threads(detail::resolveThreads(threads))
+  for (int v = 0; v < height; ++v) {
+    const float y = 2.0f * (v + 0.5f) / height - 1.0f;
+    for (int u = 0; u < width; ++u) {
+      const float x = 2.0f * (u + 0.5f) / width - 1.0f;
+      out[static_cast<std::size_t>(v) * width + u] = c[0] + c[1] * x + c[2] * y + c[3] * x * x + c[4] * x * y + c[5] * y * y;
+    }
+  }
+  return result;
+}
+
 float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,
                            const Viewpoint& viewpoint)

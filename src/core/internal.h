@@ -44,6 +44,9 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 /// framesMoved by `threads` threads, with the same result.
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads);
+/// analyseFrameChange by `threads` threads, with the same result.
+FrameOffset
+analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads);
 /// estimateTemporalNoiseRatio by `threads` threads, with the same result.
 float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,

@@ -283,6 +283,80 @@ subsample(const std::vector<T>& from, int width, int height, int k, int u0, int 
       to[static_cast<std::size_t>(b) * w + a] = from[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k];
 }
 
+/// CrossFrameBandwidth::guarded with the range-adaptive model (docs/method.md, "Low-frequency
+/// offsets between frames"): a neighbour that differs from the current frame by a slowly varying
+/// offset along the rays (FrameChange::offset) is brought to the current frame's level, and the
+/// current frame and every neighbour that did not move to the mean level of those frames. The
+/// frames' noise is then what is left between them, and the offsets, noise of a camera that did
+/// not move, are averaged out. Fills `leveled` and `out` and returns true if some neighbour
+/// had such an offset; otherwise returns false and leaves the frames as they are.
+bool
+levelFrames(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+            const Viewpoint& viewpoint, int threads, std::vector<Grid>& leveled, std::vector<const Grid*>& out)
+{
+  const int count = static_cast<int>(frames.size());
+  if (count < 2 || parameters.bandwidth_model != BandwidthModel::range_adaptive ||
+      parameters.cross_frame_bandwidth != CrossFrameBandwidth::guarded)
+    return false;
+  const Grid& current = *frames[center];
+  for (const Grid* g : frames)
+    if (!g || g->width != current.width || g->height != current.height)
+      return false; // runContiguous reports it
+  if (current.countValid() == 0)
+    return false;
+  std::vector<FrameOffset> changes(count);
+  std::vector<unsigned char> still(count, 0);
+  bool any = false;
+  for (int k = 0; k < count; ++k) {
+    if (k == center || frames[k]->countValid() == 0)
+      continue;
+    changes[k] = detail::analyseFrameChange(current, *frames[k], viewpoint, threads);
+    still[k] = changes[k].change != FrameChange::motion;
+    any = any || changes[k].change == FrameChange::offset;
+  }
+  if (!any)
+    return false;
+  // The mean level against the current frame's: the mean of o_k over the current frame (o = 0)
+  // and the neighbours that did not move (o = 0 for those without an offset). Not weighted by
+  // Psi_d: these frames did not move, so their offsets are noise, best averaged evenly.
+  const std::size_t n = current.size();
+  const float w = 1.0f / static_cast<float>(1 + std::count(still.begin(), still.end(), 1));
+  std::vector<float> mean(n, 0.0f);
+  for (int k = 0; k < count; ++k)
+    if (changes[k].change == FrameChange::offset) {
+      const float* o = changes[k].range_offset.data();
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        mean[i] += w * o[i];
+    }
+  leveled.resize(count);
+  out = frames;
+  for (int k = 0; k < count; ++k) {
+    if (k != center && !still[k])
+      continue;
+    const Grid& from = *frames[k];
+    Grid& to = leveled[k];
+    detail::copyGrid(from, to, threads);
+    const float* o = changes[k].change == FrameChange::offset ? changes[k].range_offset.data() : nullptr;
+    // Each point along its ray by the mean level minus its frame's offset.
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!to.valid[i])
+        continue;
+      const float dx = to.x[i] - viewpoint[0], dy = to.y[i] - viewpoint[1], dz = to.z[i] - viewpoint[2];
+      const float rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (!(rho > 0.0f))
+        continue;
+      const float f = std::max(0.0f, rho + mean[i] - (o ? o[i] : 0.0f)) / rho;
+      to.x[i] = viewpoint[0] + dx * f;
+      to.y[i] = viewpoint[1] + dy * f;
+      to.z[i] = viewpoint[2] + dz * f;
+    }
+    out[k] = &to;
+  }
+  return true;
+}
+
 void
 subsample(const Grid& from, int k, int u0, int v0, Grid& to, int threads)
 {
@@ -313,15 +387,24 @@ detail::automaticDilation(const Grid& frame, int threads)
 }
 
 void
-runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+runFilter(const std::vector<const Grid*>& frames_in, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
 {
-  if (frames.empty() || center < 0 || center >= static_cast<int>(frames.size()) || !frames[center]) {
-    runContiguous(frames, center, parameters, viewpoint, active, workspace);
+  if (frames_in.empty() || center < 0 || center >= static_cast<int>(frames_in.size()) || !frames_in[center]) {
+    runContiguous(frames_in, center, parameters, viewpoint, active, workspace);
     return;
   }
   // Checked before anything runs with parameters.threads threads (OpenMP crashes on absurd counts).
   parameters.validate();
+  std::vector<const Grid*> leveled;
+  {
+    StageTracker stage(workspace.observer, 0);
+    stage.start(Stage::neighbour_frames);
+    if (!levelFrames(frames_in, center, parameters, viewpoint, detail::resolveThreads(parameters.threads),
+                     workspace.leveled, leveled))
+      leveled = frames_in;
+  }
+  const std::vector<const Grid*>& frames = leveled;
   const Grid& input = *frames[center];
   const bool empty = input.countValid() == 0;
   int k = parameters.dilation;

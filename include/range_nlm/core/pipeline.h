@@ -95,6 +95,47 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b);
 
+/// How frame `b` differs from frame `a` at the same pixels (CrossFrameBandwidth::guarded;
+/// docs/method.md, "Low-frequency offsets between frames").
+enum class FrameChange
+{
+  /// Noise only: the blocks' median range differences are within their spread.
+  none,
+  /// Whole blocks differ in range, but nothing moved across the image: an offset along the rays
+  /// that varies slowly over the frame (an active-stereo camera's depth drifts so from frame to
+  /// frame, by more than its noise).
+  offset,
+  /// Whole blocks differ in range and the frame's structure moved across the image (camera or
+  /// scene motion).
+  motion
+};
+
+/// FrameChange of frame `b` against frame `a`, with the offset field where it is one.
+struct FrameOffset
+{
+  FrameChange change = FrameChange::none;
+  /// change == offset: per pixel of the grid, the range of `b` minus the range of `a` (m),
+  /// smooth over the frame; empty otherwise.
+  std::vector<float> range_offset;
+};
+
+/// Tells noise, a slowly varying offset along the rays and motion apart. The frames are cut into
+/// blocks of width / 20 pixels (at least 8); in each block with at least half its pixels valid in
+/// both frames, the median m of the range differences rho_b - rho_a and their median spread around
+/// m are taken. The blocks' median |m| within their median spread: `none` (as framesMoved, along
+/// the rays). Otherwise the frame changed, and it moved (`motion`) if
+///  - fewer than 24 blocks qualify (too few to tell a drift from blocks that moved), or
+///  - its structure moved across the image: a block is structured if shifting `b` by one or two
+///    pixels along a row or column makes the mean absolute deviation of its differences 1.5 times
+///    larger, and shows a shift if one of those shifts makes it 0.8 times smaller than no shift;
+///    at least 8 blocks are structured and at least a quarter of them show a shift, or
+///  - the block medians are not smooth over the frame: a quadratic in the image coordinates,
+///    fitted to them (weighted by 1 / spread^2, with Huber weights at 2 spreads), leaves their
+///    median distance from it above the median spread.
+/// Else `offset`, with that quadratic as the offset field.
+FrameOffset
+analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint);
+
 /// How much larger the frame-to-frame noise of frame `b` is than its spatial noise profile says:
 /// 1.4826 x the median, over the pixels valid in both frames with a normal, of
 /// |(p_b - p_a) . n_a| / profile_b.sigmaAt(rho_a), divided by sqrt(2) (the difference holds the
@@ -265,6 +306,8 @@ struct Workspace
   std::vector<Grid> phase_frames;
   Grid merged;
   std::vector<Workspace> phase;
+  /// The frames brought to a common level (levelling of low-frequency offsets between frames).
+  std::vector<Grid> leveled;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// If set, told where each phase of a run begins and ends. Not owned.
