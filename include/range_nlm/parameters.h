@@ -51,7 +51,9 @@ enum class CrossFrameBandwidth
   /// temporal, except against a frame that moved (framesMoved in core/pipeline.h: whole blocks
   /// of the frame shifted against the current one), which keeps its spatial s as in the paper.
   /// Averaging a moved frame's surfaces along the current normals would shift the current
-  /// surfaces toward them. The default.
+  /// surfaces toward them. Frames whose depth only drifted by a smooth offset along the rays
+  /// (analyseFrameChange: FrameChange::offset, an active-stereo camera standing still) are
+  /// first brought to their mean level, and then count as not moved. The default.
   guarded
 };
 

@@ -400,70 +400,84 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
   const int columns = width / block, rows = height / block;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::vector<float> medians(static_cast<std::size_t>(columns) * rows, nan), spreads(medians);
+  std::vector<double> deviations(medians.size(), 0.0);
   std::vector<unsigned char> structured(medians.size(), 0), shifted(medians.size(), 0);
   static const int kShifts[9][2] = {{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}, {2, 0}, {-2, 0}, {0, 2}, {0, -2}};
+  // The differences of block t against `b` shifted by kShifts[s] into `diff`; false if fewer
+  // than half the block's pixels are valid in both.
+  const auto differences = [&](int t, int s, std::vector<float>& diff) {
+    const int v0 = (t / columns) * block, u0 = (t % columns) * block;
+    diff.clear();
+    for (int v = v0; v < v0 + block; ++v) {
+      const int vb = v + kShifts[s][1];
+      if (vb < 0 || vb >= height)
+        continue;
+      for (int u = u0; u < u0 + block; ++u) {
+        const int ub = u + kShifts[s][0];
+        if (ub < 0 || ub >= width)
+          continue;
+        const std::size_t i = static_cast<std::size_t>(v) * width + u, j = static_cast<std::size_t>(vb) * width + ub;
+        if (a.valid[i] && b.valid[j])
+          diff.push_back(rho_b[j] - rho_a[i]);
+      }
+    }
+    return diff.size() >= static_cast<std::size_t>(block * block / 2);
+  };
+  const auto meanDeviation = [](const std::vector<float>& diff) {
+    double sum = 0.0, absolute = 0.0;
+    for (float d : diff)
+      sum += d;
+    const double mean = sum / static_cast<double>(diff.size());
+    for (float d : diff)
+      absolute += std::fabs(d - mean);
+    return absolute / static_cast<double>(diff.size());
+  };
+  // Each block by one thread into its own slots; a median does not depend on the order of its
+  // values. First the differences as they are (all `none` needs)...
 #pragma omp parallel num_threads(detail::resolveThreads(threads))
   {
     std::vector<float> diff;
 #pragma omp for schedule(dynamic, 4)
     for (int t = 0; t < columns * rows; ++t) {
-      const int v0 = (t / columns) * block, u0 = (t % columns) * block;
-      double deviation[9];
-      bool enough = true;
-      for (int s = 0; s < 9 && enough; ++s) {
-        diff.clear();
-        for (int v = v0; v < v0 + block; ++v) {
-          const int vb = v + kShifts[s][1];
-          if (vb < 0 || vb >= height)
-            continue;
-          for (int u = u0; u < u0 + block; ++u) {
-            const int ub = u + kShifts[s][0];
-            if (ub < 0 || ub >= width)
-              continue;
-            const std::size_t i = static_cast<std::size_t>(v) * width + u, j = static_cast<std::size_t>(vb) * width + ub;
-            if (a.valid[i] && b.valid[j])
-              diff.push_back(rho_b[j] - rho_a[i]);
-          }
-        }
-        if (diff.size() < static_cast<std::size_t>(block * block / 2)) {
-          enough = false;
-          break;
-        }
-        double sum = 0.0;
-        for (float d : diff)
-          sum += d;
-        const double mean = sum / static_cast<double>(diff.size());
-        double absolute = 0.0;
-        for (float d : diff)
-          absolute += std::fabs(d - mean);
-        deviation[s] = absolute / static_cast<double>(diff.size());
-        if (s == 0) {
-          const float m = medianOf(diff);
-          for (float& d : diff)
-            d = std::fabs(d - m);
-          medians[t] = m;
-          spreads[t] = medianOf(diff);
-        }
-      }
-      if (!enough)
+      if (!differences(t, 0, diff))
         continue;
-      const double largest = *std::max_element(deviation + 1, deviation + 9);
-      const double smallest = *std::min_element(deviation + 1, deviation + 9);
-      structured[t] = largest > 1.5 * deviation[0];
-      shifted[t] = structured[t] && smallest < 0.8 * deviation[0];
+      deviations[t] = meanDeviation(diff);
+      const float m = medianOf(diff);
+      for (float& d : diff)
+        d = std::fabs(d - m);
+      medians[t] = m;
+      spreads[t] = medianOf(diff);
     }
   }
   std::vector<float> offsets, block_spreads;
-  int structured_blocks = 0, shifted_blocks = 0;
   for (std::size_t t = 0; t < medians.size(); ++t)
     if (!std::isnan(medians[t])) {
       offsets.push_back(std::fabs(medians[t]));
       block_spreads.push_back(spreads[t]);
-      structured_blocks += structured[t];
-      shifted_blocks += shifted[t];
     }
   if (offsets.size() < 4 || !(medianOf(offsets) > medianOf(block_spreads)))
     return result;
+  // ... then, for a frame that changed, against `b` shifted.
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> diff;
+#pragma omp for schedule(dynamic, 4)
+    for (int t = 0; t < columns * rows; ++t) {
+      if (std::isnan(medians[t]))
+        continue;
+      double largest = 0.0, smallest = std::numeric_limits<double>::infinity();
+      for (int s = 1; s < 9; ++s)
+        if (differences(t, s, diff)) {
+          const double deviation = meanDeviation(diff);
+          largest = std::max(largest, deviation);
+          smallest = std::min(smallest, deviation);
+        }
+      structured[t] = largest > 1.5 * deviations[t];
+      shifted[t] = structured[t] && smallest < 0.8 * deviations[t];
+    }
+  }
+  const int structured_blocks = std::count(structured.begin(), structured.end(), 1);
+  const int shifted_blocks = std::count(shifted.begin(), shifted.end(), 1);
   // Too few blocks to tell a smooth drift (a quadratic: 6 coefficients) from blocks that moved
   // against each other: motion, as if there were no drift.
   if (offsets.size() < 24 || (structured_blocks >= 8 && 4 * shifted_blocks >= structured_blocks)) {
