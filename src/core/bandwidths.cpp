@@ -400,19 +400,18 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
   const int columns = width / block, rows = height / block;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::vector<float> medians(static_cast<std::size_t>(columns) * rows, nan), spreads(medians);
-  std::vector<double> deviations(medians.size(), 0.0);
   std::vector<unsigned char> structured(medians.size(), 0), shifted(medians.size(), 0);
   static const int kShifts[9][2] = {{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}, {2, 0}, {-2, 0}, {0, 2}, {0, -2}};
-  // The differences of block t against `b` shifted by kShifts[s] into `diff`; false if fewer
-  // than half the block's pixels are valid in both.
-  const auto differences = [&](int t, int s, std::vector<float>& diff) {
+  // The differences of block t against `b` shifted by kShifts[s] into `diff`, every `step`-th
+  // pixel along rows and columns; false if fewer than half of those are valid in both.
+  const auto differences = [&](int t, int s, int step, std::vector<float>& diff) {
     const int v0 = (t / columns) * block, u0 = (t % columns) * block;
     diff.clear();
-    for (int v = v0; v < v0 + block; ++v) {
+    for (int v = v0; v < v0 + block; v += step) {
       const int vb = v + kShifts[s][1];
       if (vb < 0 || vb >= height)
         continue;
-      for (int u = u0; u < u0 + block; ++u) {
+      for (int u = u0; u < u0 + block; u += step) {
         const int ub = u + kShifts[s][0];
         if (ub < 0 || ub >= width)
           continue;
@@ -421,7 +420,8 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
           diff.push_back(rho_b[j] - rho_a[i]);
       }
     }
-    return diff.size() >= static_cast<std::size_t>(block * block / 2);
+    const int side = (block + step - 1) / step;
+    return diff.size() >= static_cast<std::size_t>(side * side / 2);
   };
   const auto meanDeviation = [](const std::vector<float>& diff) {
     double sum = 0.0, absolute = 0.0;
@@ -433,15 +433,15 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
     return absolute / static_cast<double>(diff.size());
   };
   // Each block by one thread into its own slots; a median does not depend on the order of its
-  // values. First the differences as they are (all `none` needs)...
+  // values. Every other pixel along rows and columns (a quarter of them is plenty for a median
+  // and its spread).
 #pragma omp parallel num_threads(detail::resolveThreads(threads))
   {
     std::vector<float> diff;
 #pragma omp for schedule(dynamic, 4)
     for (int t = 0; t < columns * rows; ++t) {
-      if (!differences(t, 0, diff))
+      if (!differences(t, 0, 2, diff))
         continue;
-      deviations[t] = meanDeviation(diff);
       const float m = medianOf(diff);
       for (float& d : diff)
         d = std::fabs(d - m);
@@ -457,34 +457,12 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
     }
   if (offsets.size() < 4 || !(medianOf(offsets) > medianOf(block_spreads)))
     return result;
-  // ... then, for a frame that changed, against `b` shifted.
-#pragma omp parallel num_threads(detail::resolveThreads(threads))
-  {
-    std::vector<float> diff;
-#pragma omp for schedule(dynamic, 4)
-    for (int t = 0; t < columns * rows; ++t) {
-      if (std::isnan(medians[t]))
-        continue;
-      double largest = 0.0, smallest = std::numeric_limits<double>::infinity();
-      for (int s = 1; s < 9; ++s)
-        if (differences(t, s, diff)) {
-          const double deviation = meanDeviation(diff);
-          largest = std::max(largest, deviation);
-          smallest = std::min(smallest, deviation);
-        }
-      structured[t] = largest > 1.5 * deviations[t];
-      shifted[t] = structured[t] && smallest < 0.8 * deviations[t];
-    }
-  }
-  const int structured_blocks = std::count(structured.begin(), structured.end(), 1);
-  const int shifted_blocks = std::count(shifted.begin(), shifted.end(), 1);
   // Too few blocks to tell a smooth drift (a quadratic: 6 coefficients) from blocks that moved
   // against each other: motion, as if there were no drift.
-  if (offsets.size() < 24 || (structured_blocks >= 8 && 4 * shifted_blocks >= structured_blocks)) {
+  if (offsets.size() < 24) {
     result.change = FrameChange::motion;
     return result;
   }
-  result.change = FrameChange::offset;
   // A quadratic in the image coordinates (scaled to [-1, 1]) fitted to the blocks' medians,
   // weighted by 1 / spread^2 and, against outliers (a block on an object that moved), Huber
   // weights at 2 spreads from the fit, three reweightings. One block's median holds its noise
@@ -532,6 +510,33 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
     result.change = FrameChange::motion;
     return result;
   }
+  // Smooth: did the image's structure move? Each block against `b` as it is and shifted.
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> diff;
+#pragma omp for schedule(dynamic, 4)
+    for (int t = 0; t < columns * rows; ++t) {
+      if (std::isnan(medians[t]) || !differences(t, 0, 2, diff))
+        continue;
+      const double still = meanDeviation(diff);
+      double largest = 0.0, smallest = std::numeric_limits<double>::infinity();
+      for (int s = 1; s < 9; ++s)
+        if (differences(t, s, 2, diff)) {
+          const double deviation = meanDeviation(diff);
+          largest = std::max(largest, deviation);
+          smallest = std::min(smallest, deviation);
+        }
+      structured[t] = largest > 1.5 * still;
+      shifted[t] = structured[t] && smallest < 0.8 * still;
+    }
+  }
+  const int structured_blocks = std::count(structured.begin(), structured.end(), 1);
+  const int shifted_blocks = std::count(shifted.begin(), shifted.end(), 1);
+  if (structured_blocks >= 8 && 4 * shifted_blocks >= structured_blocks) {
+    result.change = FrameChange::motion;
+    return result;
+  }
+  result.change = FrameChange::offset;
   const Eigen::Matrix<float, 6, 1> c = coefficients.cast<float>();
   result.range_offset.resize(n);
   float* __restrict out = result.range_offset.data();
