@@ -345,9 +345,10 @@ levelFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
         continue;
       const float dx = to.x[i] - viewpoint[0], dy = to.y[i] - viewpoint[1], dz = to.z[i] - viewpoint[2];
       const float rho = std::sqrt(dx * dx + dy * dy + dz * dz);
-      if (!(rho > 0.0f))
-        continue;
-      const float f = std::max(0.0f, rho + mean[i] - (o ? o[i] : 0.0f)) / rho;
+      const float target = rho + mean[i] - (o ? o[i] : 0.0f);
+      if (!(rho > 0.0f) || !(target > 0.0f))
+        continue; // a shift to or behind the viewpoint: the point stays where it is
+      const float f = target / rho;
       to.x[i] = viewpoint[0] + dx * f;
       to.y[i] = viewpoint[1] + dy * f;
       to.z[i] = viewpoint[2] + dz * f;
