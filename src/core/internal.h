@@ -44,6 +44,27 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 /// framesMoved by `threads` threads, with the same result.
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads);
+/// The median (the value at rank count / 2 from 0, as std::nth_element finds it) of the count
+/// values[i] >= 0 with mask[i] set (every i if mask is null) among n, by `threads` threads; NaN
+/// if there is none. `count` (if given) receives that count.
+float
+medianOfNonNegative(const float* values, const unsigned char* mask, std::size_t n, int threads,
+                    std::size_t* count = nullptr);
+/// framesMoved and estimateTemporalNoiseRatio of one pair of frames in one pass over them.
+struct FrameComparison
+{
+  /// framesMoved (false unless `test_motion`).
+  bool moved = false;
+  /// estimateTemporalNoiseRatio with sigma_b[i] = profile_b.sigmaAt(rho_a[i]) (0 if moved, if
+  /// sigma_b is null, or with fewer than 64 pixels).
+  float ratio = 0.0f;
+};
+/// The motion test (if `test_motion`) and, unless the frames moved, the frame-to-frame noise
+/// ratio against the per-pixel noise sigma_b (if not null; n = a.size() values, 0 where a is
+/// invalid), each as its own function computes it, by `threads` threads.
+FrameComparison
+compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b, const float* sigma_b, bool test_motion,
+              int threads);
 /// analyseFrameChange by `threads` threads, with the same result.
 FrameOffset
 analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads);

@@ -554,18 +554,8 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       out[i] = valid[i] ? r : 0.0f;
     }
   };
-  auto rangesOf = [&](const Grid& g) {
-    std::vector<float> rho;
-    rangesInto(g, rho);
-    return rho;
-  };
   auto medianRange = [&](const Grid& g, const std::vector<float>& rho) {
-    std::vector<float> valid;
-    for (std::size_t i = 0; i < g.size(); ++i)
-      if (g.valid[i])
-        valid.push_back(rho[i]);
-    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
-    return valid[valid.size() / 2];
+    return detail::medianOfNonNegative(rho.data(), g.valid.data(), g.size(), threads);
   };
 
   // Per frame: scalar bandwidths (global model) or a noise profile (range-adaptive model).
@@ -595,10 +585,16 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
   // Neighbour frames are estimated once, from their own data (the range-adaptive model reads
   // their profiles at the centre frame's median range).
   StageObserver* const observer = workspace.observer;
+  // With neighbours: the first iteration's ranges (workspace.ranges) and their median, taken
+  // before the neighbours' estimates (run.output is still the input).
+  float input_rho_median = 0.0f;
   if (count > 1) {
     StageTracker stage(observer, 0);
     stage.start(Stage::neighbour_frames);
-    const float input_rho_median = adaptive ? medianRange(run.output, rangesOf(run.output)) : 0.0f;
+    if (adaptive) {
+      rangesInto(run.output, workspace.ranges);
+      input_rho_median = medianRange(run.output, workspace.ranges);
+    }
     for (int k = 0; k < count; ++k) {
       if (k == center)
         continue;
@@ -631,8 +627,10 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     std::vector<float>& rho = workspace.ranges;
     if (adaptive) {
       stage.start(Stage::bandwidths);
-      rangesInto(current, rho);
-      estimateFrame(center, current, nullptr, medianRange(current, rho));
+      const bool known = iteration == 0 && count > 1; // the neighbours' stage took them
+      if (!known)
+        rangesInto(current, rho);
+      estimateFrame(center, current, nullptr, known ? input_rho_median : medianRange(current, rho));
     } else {
       stage.start(Stage::normals);
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, {}, 0, normals,
@@ -707,19 +705,24 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         // its frame-to-frame noise where that is larger (spatially correlated noise): its
         // patches then get s from that noise, and its points a d that also spans the distance
         // two samples of one surface point have from frame to frame (2 s^2 more in d^2).
-        const float ratio =
-            k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
-                            (parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded &&
-                             !detail::framesMoved(current, normals, *frames[k], threads)))
-                ? std::max(1.0f, detail::estimateTemporalNoiseRatio(current, normals, *frames[k], profiles[k],
-                                                                    viewpoint, threads))
-                : 1.0f;
-        const bool cross = ratio > 1.0f;
+        // The motion test and the ratio in one pass over the two frames (detail::compareFrames),
+        // the ratio against the profile's sigma at the centre points' ranges (`sig`).
         const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
-        std::vector<float>& sig = workspace.profile_sigma;
+        const bool compared = k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
+                                              parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded);
+        // The current frame's sigma map is the noise maps' (workspace.profile_sigma).
+        std::vector<float>& sig = k == center ? workspace.profile_sigma : workspace.other_sigma;
         std::vector<float>& ext = workspace.profile_extent;
-        if (own_d || own_s)
+        if (k != center && (own_d || own_s || compared))
           profileMap(profiles[k].range, profiles[k].sigma, rho, sig);
+        const float ratio =
+            compared ? std::max(1.0f, detail::compareFrames(current, normals, *frames[k], sig.data(),
+                                                            parameters.cross_frame_bandwidth ==
+                                                                CrossFrameBandwidth::guarded,
+                                                            threads)
+                                          .ratio)
+                     : 1.0f;
+        const bool cross = ratio > 1.0f;
         if (own_d) {
           profileMap(profiles[k].range, profiles[k].extent, rho, ext);
           inverse_d2[k].resize(n);

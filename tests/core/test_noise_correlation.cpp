@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 
 using namespace range_nlm;
@@ -490,6 +492,57 @@ TEST(Dilation, DefaultRunIsTheSameForAnyThreadCountAndAReusedWorkspace)
     }
   }
 }
+
+// The histogram median (the ranges' median of every run, the frame-to-frame noise ratio) is the
+// value std::nth_element puts at rank count / 2, skipping negative, NaN and masked values; with
+// ties (a quantized depth unit), values sharing one histogram bin and the count, for any thread
+// count.
+TEST(Median, HistogramMedianIsTheNthElementOfTheCountedValues)
+{
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(1.5f, 0.4f);
+  for (std::size_t n : {1u, 2u, 7u, 1000u, 307200u}) {
+    for (int quantized = 0; quantized < 2; ++quantized) {
+      std::vector<float> values(n);
+      std::vector<unsigned char> mask(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        float v = noise(rng);
+        if (quantized)
+          v = std::round(v * 1000.0f) / 1000.0f; // many equal values, neighbours in one bin
+        if (i % 11 == 3)
+          v = -v;
+        if (i % 17 == 5)
+          v = std::numeric_limits<float>::quiet_NaN();
+        values[i] = v;
+        mask[i] = i % 5 != 1;
+      }
+      for (const unsigned char* m : {static_cast<const unsigned char*>(nullptr),
+                                     static_cast<const unsigned char*>(mask.data())}) {
+        std::vector<float> counted;
+        for (std::size_t i = 0; i < n; ++i)
+          if ((!m || m[i]) && values[i] >= 0.0f)
+            counted.push_back(values[i]);
+        for (int threads : {1, 2, 3}) {
+          std::size_t count = 12345;
+          const float median = detail::medianOfNonNegative(values.data(), m, n, threads, &count);
+          ASSERT_EQ(count, counted.size()) << n;
+          if (counted.empty()) {
+            EXPECT_TRUE(std::isnan(median)) << n;
+            continue;
+          }
+          std::vector<float> sorted = counted;
+          std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+          EXPECT_EQ(median, sorted[sorted.size() / 2]) << n << " quantized " << quantized << " threads " << threads;
+        }
+      }
+    }
+  }
+  const std::vector<float> none = {-1.0f, std::numeric_limits<float>::quiet_NaN(), -0.5f};
+  std::size_t count = 7;
+  EXPECT_TRUE(std::isnan(detail::medianOfNonNegative(none.data(), nullptr, none.size(), 2, &count)));
+  EXPECT_EQ(count, 0u);
+}
+
 
 // The temporal filter's motion test and frame-to-frame noise ratio run on several threads: the
 // same answers as one thread; and the temporal default (radius 1, guarded cross-frame bandwidths,
