@@ -226,13 +226,31 @@ NoiseProfile
 detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                              const Viewpoint& viewpoint, int threads)
 {
-  std::vector<int> candidates;
-  candidates.reserve(grid.size());
-  for (std::size_t i = 0; i < grid.size(); ++i)
-    if (grid.valid[i])
-      candidates.push_back(static_cast<int>(i));
-  if (candidates.empty())
+  // The samples are the valid points of ranks rng() % valid, in index order. Valid points are
+  // counted per chunk of 64 pixels (a vectorized sum), and each rank is found in its chunk.
+  constexpr std::size_t kChunk = 64;
+  const std::size_t n = grid.size(), chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::uint32_t> before(chunks + 1, 0u); // valid points before each chunk
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const unsigned char* __restrict v = grid.valid.data() + c * kChunk;
+    const std::size_t m = std::min(kChunk, n - c * kChunk);
+    std::uint32_t count = 0;
+    for (std::size_t i = 0; i < m; ++i)
+      count += v[i] != 0;
+    before[c + 1] = before[c] + count;
+  }
+  const std::uint64_t valid_count = before[chunks];
+  if (valid_count == 0)
     throw UnfilterableFrame("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
+  const auto validOfRank = [&](std::uint64_t rank) {
+    const std::size_t c =
+        static_cast<std::size_t>(std::upper_bound(before.begin(), before.end(), rank) - before.begin()) - 1;
+    std::uint64_t left = rank - before[c];
+    std::size_t i = c * kChunk;
+    for (;; ++i)
+      if (grid.valid[i] && left-- == 0)
+        return static_cast<int>(i);
+  };
   std::mt19937_64 rng(seed);
   // At least the 3 x 3 neighbourhood: a plane fit needs 4 points, and a 1 x 1 search window (which
   // moves nothing) must not make the noise estimate impossible.
@@ -245,7 +263,7 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
   // slots of windows that qualify are kept in sample order.
   std::vector<int> picked(static_cast<std::size_t>(std::max(samples, 0)));
   for (int& k : picked)
-    k = candidates[rng() % candidates.size()];
+    k = validOfRank(rng() % valid_count);
   std::vector<Sample> slots(picked.size());
   std::vector<unsigned char> kept(picked.size(), 0);
   (void)threads;

@@ -56,6 +56,47 @@ moveAlongNormals(float* __restrict x, float* __restrict y, float* __restrict z, 
   }
 }
 
+/// applyOffsets along the line of sight for points [0, n), branch-free as moveAlongNormals: each
+/// point moves along its ray from the viewpoint onto the plane (q - p) . n = -h, by t = -h / cos
+/// with |cos| at least min_cos (at grazing angles h / cos would amplify any normal error); with
+/// Clamped, h and t are clamped to +/- limit[i].
+template <bool Clamped>
+void
+moveAlongRays(float* __restrict x, float* __restrict y, float* __restrict z, const unsigned char* __restrict valid,
+              const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+              const float* __restrict hs, const float* __restrict limit, const Viewpoint& viewpoint, float min_cos,
+              std::ptrdiff_t n)
+{
+  const float largest = std::numeric_limits<float>::max();
+  const float ox = viewpoint[0], oy = viewpoint[1], oz = viewpoint[2];
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    float h = hs[i];
+    if constexpr (Clamped) {
+      const float b = limit[i];
+      h = h < -b ? -b : h;
+      h = h > b ? b : h; // NaN stays NaN
+    }
+    const float px = x[i], py = y[i], pz = z[i];
+    float vx = px - ox, vy = py - oy, vz = pz - oz;
+    const float len = std::sqrt(vx * vx + vy * vy + vz * vz);
+    const float v = valid[i];
+    const bool moves = (v > 0.0f) & (h != 0.0f) & (std::fabs(h) <= largest) & (len > 0.0f);
+    vx /= len, vy /= len, vz /= len;
+    float c = vx * nx[i] + vy * ny[i] + vz * nz[i];
+    const float signed_bound = c < 0.0f ? -min_cos : min_cos;
+    c = std::fabs(c) < min_cos ? signed_bound : c;
+    float t = -h / c;
+    if constexpr (Clamped) {
+      const float b = limit[i];
+      t = t < -b ? -b : t;
+      t = t > b ? b : t;
+    }
+    x[i] = moves ? px + t * vx : px;
+    y[i] = moves ? py + t * vy : py;
+    z[i] = moves ? pz + t * vz : pz;
+  }
+}
+
 int
 resolveThreads(int threads)
 {
@@ -140,33 +181,13 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
            &normals.nz[lo], &offsets[lo], limit.empty() ? nullptr : &limit[lo], std::min(block, n - lo));
     return;
   }
+  const auto move = limit.empty() ? detail::moveAlongRays<false> : detail::moveAlongRays<true>;
+  const float bound = std::max(min_cos, 1e-3f);
+  const std::ptrdiff_t block = 4096;
 #pragma omp parallel for schedule(static)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    float h = offsets[i];
-    if (!limit.empty())
-      h = std::clamp(h, -limit[i], limit[i]);
-    if (!grid.valid[i] || h == 0.0f || !std::isfinite(h))
-      continue;
-    const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
-    // Stay on the camera ray and land on the plane (q - p) . n = -h.
-    float vx = grid.x[i] - viewpoint[0], vy = grid.y[i] - viewpoint[1], vz = grid.z[i] - viewpoint[2];
-    const float len = std::sqrt(vx * vx + vy * vy + vz * vz);
-    if (!(len > 0.0f))
-      continue;
-    vx /= len, vy /= len, vz /= len;
-    // At grazing angles the ray step h / cos would amplify any normal error: |cos| is bounded
-    // below by min_cos (the point still stays on its ray, so a depth image can hold it).
-    float c = vx * nx + vy * ny + vz * nz;
-    const float bound = std::max(min_cos, 1e-3f);
-    if (std::fabs(c) < bound)
-      c = c < 0.0f ? -bound : bound;
-    float t = -h / c;
-    if (!limit.empty())
-      t = std::clamp(t, -limit[i], limit[i]);
-    grid.x[i] += t * vx;
-    grid.y[i] += t * vy;
-    grid.z[i] += t * vz;
-  }
+  for (std::ptrdiff_t lo = 0; lo < n; lo += block)
+    move(&grid.x[lo], &grid.y[lo], &grid.z[lo], &grid.valid[lo], &normals.nx[lo], &normals.ny[lo], &normals.nz[lo],
+         &offsets[lo], limit.empty() ? nullptr : &limit[lo], viewpoint, bound, std::min(block, n - lo));
 }
 
 float

@@ -257,3 +257,61 @@ TEST(Kernel, BandwidthsAreDeterministicPerSeed)
   EXPECT_GT(a.sigma_s, 0.003f);
   EXPECT_LT(a.sigma_s, 0.012f);
 }
+
+// applyOffsets along the line of sight (vectorized, every point computed and only the moving
+// ones taking the result) against the scalar rule, point by point: the point stays on its ray
+// from the viewpoint, steps t = -h / cos with |cos| >= min_cos, h and t within +/- limit; holes,
+// zero, NaN and infinite offsets and the viewpoint itself leave the point as it is.
+TEST(Kernel, LineOfSightDisplacementIsTheScalarRule)
+{
+  Grid grid = randomSurface(67, 23, 0.1, 41);
+  const Viewpoint viewpoint{0.01f, -0.02f, 0.0f};
+  const std::size_t n = grid.size();
+  NormalField normals = estimateNormals(grid, 5, viewpoint, 1);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> offset(-0.02f, 0.02f), tilt(-1.0f, 1.0f);
+  std::vector<float> offsets(n), limit(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    offsets[i] = offset(rng);
+    limit[i] = 0.01f * (1.0f + tilt(rng));
+    if (i % 13 == 2) { // grazing normals: |cos| below min_cos
+      const float a = tilt(rng);
+      normals.nx[i] = std::cos(a), normals.ny[i] = std::sin(a), normals.nz[i] = 0.0f;
+    }
+  }
+  offsets[5] = 0.0f;
+  offsets[6] = std::numeric_limits<float>::quiet_NaN();
+  offsets[7] = std::numeric_limits<float>::infinity();
+  grid.x[8] = viewpoint[0], grid.y[8] = viewpoint[1], grid.z[8] = viewpoint[2], grid.valid[8] = 1;
+  for (const bool clamped : {false, true}) {
+    const float min_cos = 0.25f;
+    Grid moved = grid;
+    applyOffsets(moved, normals, offsets, Displacement::line_of_sight, viewpoint, clamped ? limit : std::vector<float>{},
+                 min_cos);
+    std::size_t moving = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      float h = offsets[i];
+      if (clamped)
+        h = std::clamp(h, -limit[i], limit[i]);
+      float vx = grid.x[i] - viewpoint[0], vy = grid.y[i] - viewpoint[1], vz = grid.z[i] - viewpoint[2];
+      const float len = std::sqrt(vx * vx + vy * vy + vz * vz);
+      if (!grid.valid[i] || h == 0.0f || !std::isfinite(h) || !(len > 0.0f)) {
+        if (grid.valid[i])
+          EXPECT_TRUE(moved.x[i] == grid.x[i] && moved.y[i] == grid.y[i] && moved.z[i] == grid.z[i]) << i;
+        continue;
+      }
+      vx /= len, vy /= len, vz /= len;
+      float c = vx * normals.nx[i] + vy * normals.ny[i] + vz * normals.nz[i];
+      if (std::fabs(c) < min_cos)
+        c = c < 0.0f ? -min_cos : min_cos;
+      float t = -h / c;
+      if (clamped)
+        t = std::clamp(t, -limit[i], limit[i]);
+      EXPECT_EQ(moved.x[i], grid.x[i] + t * vx) << i;
+      EXPECT_EQ(moved.y[i], grid.y[i] + t * vy) << i;
+      EXPECT_EQ(moved.z[i], grid.z[i] + t * vz) << i;
+      ++moving;
+    }
+    EXPECT_GT(moving, n / 2);
+  }
+}
