@@ -414,9 +414,6 @@ detail::compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b
     // camera or the scene moved.
     const int block = std::max(8, a.width / 20);
     const int columns = a.width / block, rows = a.height / block;
-    // Every other pixel along rows and columns (as analyseFrameChange): a quarter of the
-    // pixels is plenty for two medians per block.
-    const int samples = ((block + 1) / 2) * ((block + 1) / 2);
     // Each block by one thread into its own slot (NaN: too few pixels); a median does not depend
     // on the order of its values.
     std::vector<float> block_offsets(static_cast<std::size_t>(columns) * rows, nan), block_spreads(block_offsets);
@@ -427,13 +424,13 @@ detail::compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b
       for (int t = 0; t < columns * rows; ++t) {
         const int v0 = (t / columns) * block, u0 = (t % columns) * block;
         in_block.clear();
-        for (int v = v0; v < v0 + block; v += 2)
-          for (int u = u0; u < u0 + block; u += 2) {
+        for (int v = v0; v < v0 + block; ++v)
+          for (int u = u0; u < u0 + block; ++u) {
             const float d = along[static_cast<std::size_t>(v) * a.width + u];
             if (!std::isnan(d))
               in_block.push_back(d);
           }
-        if (in_block.size() < static_cast<std::size_t>(samples / 2))
+        if (in_block.size() < static_cast<std::size_t>(block * block / 2))
           continue;
         const float m = medianOf(in_block);
         for (float& d : in_block)
@@ -655,6 +652,52 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
                            const Viewpoint& viewpoint)
 {
   return detail::estimateTemporalNoiseRatio(a, normals_a, b, profile_b, viewpoint, 1);
+}
+
+void
+detail::markChangedPixels(const Grid& a, const NormalField& normals_a, const Grid& b, const float* sigma_b,
+                          float ratio, int threads, std::vector<unsigned char>& changed)
+{
+  const std::size_t n = a.size();
+  changed.assign(n, 0);
+  if (b.size() != n || normals_a.size() != n || a.width <= 0)
+    return;
+  threads = detail::resolveThreads(threads);
+  const int width = a.width, height = a.height;
+  // Per pixel: known (valid in both, finite normal) and, if known, beyond the threshold; then
+  // their sums over 3 x 3 pixels, along the rows, then along the columns.
+  std::vector<unsigned char> known(n), beyond(n), row_known(n), row_beyond(n);
+  const float scale = kChangeSigmas * 1.41421356f * ratio;
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    const bool usable = a.valid[i] && b.valid[i] && std::isfinite(normals_a.nx[i]);
+    const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
+                        (b.z[i] - a.z[i]) * normals_a.nz[i];
+    known[i] = usable;
+    beyond[i] = usable && std::fabs(along) > scale * sigma_b[i];
+  }
+  const auto sum3 = [](const unsigned char* in, unsigned char* out, int count) {
+    for (int j = 0; j < count; ++j)
+      out[j] = static_cast<unsigned char>(in[j] + (j > 0 ? in[j - 1] : 0) + (j + 1 < count ? in[j + 1] : 0));
+  };
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * width;
+    sum3(&known[row], &row_known[row], width);
+    sum3(&beyond[row], &row_beyond[row], width);
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * width;
+    const std::size_t above = v > 0 ? row - width : row, below = v + 1 < height ? row + width : row;
+    const unsigned char up = v > 0, down = v + 1 < height; // rows outside the frame count 0
+    for (int u = 0; u < width; ++u) {
+      const int k = row_known[row + u] + up * row_known[above + u] + down * row_known[below + u];
+      const int y = row_beyond[row + u] + up * row_beyond[above + u] + down * row_beyond[below + u];
+      changed[row + u] = k > 0 && 2 * y > k;
+    }
+  }
 }
 
 float

@@ -759,6 +759,16 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
             const float s = ss * g[i];
             out[i] = detail::inverseSquareInline(cross ? std::sqrt(d * d + 2.0f * s * s) : d);
           }
+          // Guarded: no weight from frame k for a point whose surroundings changed from this frame
+          // to frame k by far more than the noise (d = 0: only an exact match would keep weight).
+          if (k != center && parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded) {
+            std::vector<unsigned char>& changed = workspace.changed;
+            detail::markChangedPixels(current, normals, *frames[k], g, ratio, threads, changed);
+            const float none = detail::inverseSquareInline(0.0f);
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+            for (std::ptrdiff_t i = 0; i < size; ++i)
+              out[i] = changed[i] ? none : out[i];
+          }
           term.inverse_distance2 = &inverse_d2[k];
         }
         if (own_s) {

@@ -4,6 +4,7 @@
 #include <range_nlm/nonlocal_means_filter.h>
 #include <range_nlm/eval/synthetic_scene.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
+#include <range_nlm/temporal_stream.h>
 
 #include <gtest/gtest.h>
 #include <pcl/filters/fast_bilateral.h>
@@ -11,6 +12,7 @@
 #include <cstdio>
 #include <deque>
 #include <limits>
+#include <utility>
 
 using namespace range_nlm;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
@@ -239,7 +241,52 @@ TEST(Quality, GuardedCrossFrameBandwidthsDoNotAverageAMovedFrameIn)
   print("guarded", guarded);
   print("temporal", temporal);
   print("spatial", spatial);
-  // Measured: guarded = spatial 11.77 / 11.85 mm, temporal 19.67 / 20.33 mm.
-  EXPECT_EQ(guarded.flat_rmse, spatial.flat_rmse);
+  // Measured: guarded 11.79 / 11.40 mm, spatial 11.77 / 11.85 mm, temporal 19.67 / 20.33 mm
+  // (guarded keeps the paper's bandwidths, and its per-pixel test of change takes the weight of
+  // the moved frames from the points whose surroundings changed).
+  EXPECT_LT(guarded.flat_rmse, 1.01 * spatial.flat_rmse);
+  EXPECT_LT(guarded.feature_rmse, 1.01 * spatial.feature_rmse);
   EXPECT_LT(guarded.flat_rmse, 0.8 * temporal.flat_rmse);
+}
+
+TEST(Quality, MovingObjectUnderStructuredLightNoiseLeavesNoGhost)
+{
+  // Five frames of the boxes scene at 640 x 480 with structured-light (kinect1) noise, the near
+  // box moving 10 mm per frame: the temporal default (radius 1) must be no worse than filtering
+  // each frame alone at the moving edges, and steadier on the static parts. Without the per-pixel
+  // test of change (as `spatial` here) the moving edges were worse than per frame: the
+  // neighbours' points where the box was, or was not, pulled the edges.
+  SceneOptions o = vgaScene("kinect1", 5, 1);
+  o.motion = Motion::moving_box;
+  const auto seq = renderSequence(o);
+  std::vector<Cloud::ConstPtr> frames;
+  for (const auto& f : seq)
+    frames.emplace_back(new Cloud(f.noisy));
+  const auto evaluate = [&](const std::vector<Cloud::Ptr>& out) {
+    SequenceEvaluator e;
+    for (std::size_t k = 0; k < seq.size(); ++k)
+      e.add(seq[k].truth, *out[k], frames[k].get());
+    return e.metrics();
+  };
+  FilterParameters p = FilterParameters::recommended();
+  std::vector<Cloud::Ptr> alone;
+  for (const auto& f : frames) {
+    NonLocalMeansFilter<pcl::PointXYZ> s;
+    s.setParameters(p);
+    s.setInputCloud(f);
+    alone.emplace_back(new Cloud);
+    s.filter(*alone.back());
+  }
+  const SequenceMetrics per_frame = evaluate(alone);
+  const SequenceMetrics guarded = evaluate(filterSequence<pcl::PointXYZ>(frames, 1, false, p));
+  p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
+  const SequenceMetrics spatial = evaluate(filterSequence<pcl::PointXYZ>(frames, 1, false, p));
+  for (const auto& [what, m] : {std::pair<const char*, const SequenceMetrics&>{"per frame", per_frame},
+                                {"temporal (default)", guarded},
+                                {"temporal, spatial bandwidths", spatial}})
+    std::printf("%-30s temporal std %.3f mm, moving edges %.3f mm\n", what, 1000 * m.temporal_std,
+                1000 * m.moving_edge_rmse);
+  // Measured: per frame 0.980 / 0.971 mm, default 0.548 / 0.905 mm, spatial 0.545 / 1.146 mm.
+  EXPECT_LE(guarded.moving_edge_rmse, per_frame.moving_edge_rmse);
+  EXPECT_LT(guarded.temporal_std, 0.65 * per_frame.temporal_std);
 }

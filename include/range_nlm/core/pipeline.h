@@ -89,7 +89,7 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 /// Whether frame `b` moved against frame `a` (camera or scene motion) rather than differing by
 /// noise: the frames are cut into blocks of width / 20 pixels (at least 8); in each block with
 /// at least half its pixels valid in both frames, the median m of (p_b - p_a) . n_a and the
-/// median |(p_b - p_a) . n_a - m| are taken (on every other pixel along rows and columns). Noise, however correlated, leaves m near 0 in
+/// median |(p_b - p_a) . n_a - m| are taken. Noise, however correlated, leaves m near 0 in
 /// blocks holding many noise blobs; motion shifts whole blocks. True if the median |m| over the
 /// blocks exceeds the median spread. False with fewer than 4 such blocks.
 bool
@@ -299,6 +299,8 @@ struct Workspace
   /// Per-point ranges, profile values (the current frame's sigma, another frame's sigma,
   /// extent) and per-frame bandwidth maps of a run.
   std::vector<float> ranges, profile_sigma, other_sigma, profile_extent, range_sigma, gate;
+  /// The pixels of the current frame that changed against a neighbour (guarded cross-frame bandwidths).
+  std::vector<unsigned char> changed;
   std::vector<std::vector<float>> inverse_d2, inverse_s2;
   /// The pre-smoothed copy the normals are fitted on.
   Grid smooth;
