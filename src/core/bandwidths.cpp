@@ -655,8 +655,8 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
 }
 
 void
-detail::markChangedPixels(const Grid& a, const NormalField& normals_a, const Grid& b, const float* sigma_b,
-                          float ratio, int threads, std::vector<unsigned char>& changed)
+detail::markChangedPixels(const Grid& a, const NormalField& normals_a, const float* sigma_a, const Grid& b,
+                          const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
 {
   const std::size_t n = a.size();
   changed.assign(n, 0);
@@ -675,7 +675,7 @@ detail::markChangedPixels(const Grid& a, const NormalField& normals_a, const Gri
     const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
                         (b.z[i] - a.z[i]) * normals_a.nz[i];
     known[i] = usable;
-    beyond[i] = usable && std::fabs(along) > scale * sigma_b[i];
+    beyond[i] = usable && std::fabs(along) > scale * std::max(sigma_a[i], sigma_b[i]);
   }
   const auto sum3 = [](const unsigned char* in, unsigned char* out, int count) {
     for (int j = 0; j < count; ++j)

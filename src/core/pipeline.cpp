@@ -763,7 +763,8 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
           // to frame k by far more than the noise (d = 0: only an exact match would keep weight).
           if (k != center && parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded) {
             std::vector<unsigned char>& changed = workspace.changed;
-            detail::markChangedPixels(current, normals, *frames[k], g, ratio, threads, changed);
+            detail::markChangedPixels(current, normals, workspace.profile_sigma.data(), *frames[k], g, ratio,
+                                      threads, changed);
             const float none = detail::inverseSquareInline(0.0f);
 #pragma omp parallel for simd schedule(static) num_threads(threads)
             for (std::ptrdiff_t i = 0; i < size; ++i)
