@@ -387,33 +387,48 @@ detail::medianOfNonNegative(const float* values, const unsigned char* mask, std:
   return in_bin[k];
 }
 
+void
+detail::alongNormals(const Grid& a, const NormalField& normals_a, const Grid& b, int threads, std::vector<float>& along)
+{
+  const std::size_t n = a.size();
+  along.resize(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static) num_threads(detail::resolveThreads(threads))
+  for (std::ptrdiff_t i = 0; i < size; ++i)
+    along[i] = a.valid[i] && b.valid[i] && std::isfinite(normals_a.nx[i])
+                   ? (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
+                         (b.z[i] - a.z[i]) * normals_a.nz[i]
+                   : nan;
+}
+
 detail::FrameComparison
 detail::compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b, const float* sigma_b,
                       bool test_motion, int threads)
 {
-  FrameComparison result;
   if (a.size() != b.size() || normals_a.size() != a.size() || a.width <= 0)
+    return FrameComparison();
+  std::vector<float> along;
+  detail::alongNormals(a, normals_a, b, threads, along);
+  return detail::compareAlong(along, a.width, a.height, sigma_b, test_motion, threads);
+}
+
+detail::FrameComparison
+detail::compareAlong(const std::vector<float>& along, int width, int height, const float* sigma_b, bool test_motion,
+                     int threads)
+{
+  FrameComparison result;
+  const std::size_t n = along.size();
+  if (width <= 0 || n != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
     return result;
   threads = detail::resolveThreads(threads);
-  // (p_b - p_a) . n_a once per pixel, NaN where either point is invalid or n_a is not finite.
-  const std::size_t n = a.size();
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  std::vector<float> along(n);
-  {
-    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < size; ++i)
-      along[i] = a.valid[i] && b.valid[i] && std::isfinite(normals_a.nx[i])
-                     ? (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
-                           (b.z[i] - a.z[i]) * normals_a.nz[i]
-                     : nan;
-  }
   if (test_motion) {
     // Blocks of about 1/20 of the width (32 pixels at 640): many noise blobs each, so that their
     // median difference is near 0 for noise, however correlated, and near the motion where the
     // camera or the scene moved.
-    const int block = std::max(8, a.width / 20);
-    const int columns = a.width / block, rows = a.height / block;
+    const int block = std::max(8, width / 20);
+    const int columns = width / block, rows = height / block;
     // Each block by one thread into its own slot (NaN: too few pixels); a median does not depend
     // on the order of its values.
     std::vector<float> block_offsets(static_cast<std::size_t>(columns) * rows, nan), block_spreads(block_offsets);
@@ -426,7 +441,7 @@ detail::compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b
         in_block.clear();
         for (int v = v0; v < v0 + block; ++v)
           for (int u = u0; u < u0 + block; ++u) {
-            const float d = along[static_cast<std::size_t>(v) * a.width + u];
+            const float d = along[static_cast<std::size_t>(v) * width + u];
             if (!std::isnan(d))
               in_block.push_back(d);
           }
@@ -452,14 +467,15 @@ detail::compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b
   if (!sigma_b)
     return result;
   // The median of |along| / sigma_b over the pixels where both are usable (-1 elsewhere).
+  std::vector<float> ratios(n);
   {
     const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (std::ptrdiff_t i = 0; i < size; ++i)
-      along[i] = !std::isnan(along[i]) && sigma_b[i] > 0.0f ? std::fabs(along[i]) / sigma_b[i] : -1.0f;
+      ratios[i] = !std::isnan(along[i]) && sigma_b[i] > 0.0f ? std::fabs(along[i]) / sigma_b[i] : -1.0f;
   }
   std::size_t count = 0;
-  const float median = detail::medianOfNonNegative(along.data(), nullptr, n, threads, &count);
+  const float median = detail::medianOfNonNegative(ratios.data(), nullptr, n, threads, &count);
   if (count >= 64)
     result.ratio = 1.4826f * 0.70710678f * median;
   return result;
@@ -658,44 +674,61 @@ void
 detail::markChangedPixels(const Grid& a, const NormalField& normals_a, const float* sigma_a, const Grid& b,
                           const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
 {
-  const std::size_t n = a.size();
+  if (b.size() != a.size() || normals_a.size() != a.size() || a.width <= 0) {
+    changed.assign(a.size(), 0);
+    return;
+  }
+  std::vector<float> along;
+  detail::alongNormals(a, normals_a, b, threads, along);
+  detail::markChangedPixels(along, a.width, a.height, sigma_a, sigma_b, ratio, threads, changed);
+}
+
+void
+detail::markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
+                          const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
+{
+  const std::size_t n = along.size();
   changed.assign(n, 0);
-  if (b.size() != n || normals_a.size() != n || a.width <= 0)
+  if (width <= 0 || n != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
     return;
   threads = detail::resolveThreads(threads);
-  const int width = a.width, height = a.height;
-  // Per pixel: known (valid in both, finite normal) and, if known, beyond the threshold; then
-  // their sums over 3 x 3 pixels, along the rows, then along the columns.
-  std::vector<unsigned char> known(n), beyond(n), row_known(n), row_beyond(n);
+  // Per pixel one byte: known (valid in both, finite normal) in the low nibble, beyond the
+  // threshold in the high one; their sums over 3 x 3 pixels (at most 9 each, so the nibbles do
+  // not carry), along the rows into `rows`, then along the columns.
+  std::vector<unsigned char> code(n), rows(n);
   const float scale = kChangeSigmas * 1.41421356f * ratio;
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i) {
-    const bool usable = a.valid[i] && b.valid[i] && std::isfinite(normals_a.nx[i]);
-    const float along = (b.x[i] - a.x[i]) * normals_a.nx[i] + (b.y[i] - a.y[i]) * normals_a.ny[i] +
-                        (b.z[i] - a.z[i]) * normals_a.nz[i];
-    known[i] = usable;
-    beyond[i] = usable && std::fabs(along) > scale * std::max(sigma_a[i], sigma_b[i]);
-  }
-  const auto sum3 = [](const unsigned char* in, unsigned char* out, int count) {
-    for (int j = 0; j < count; ++j)
-      out[j] = static_cast<unsigned char>(in[j] + (j > 0 ? in[j - 1] : 0) + (j + 1 < count ? in[j + 1] : 0));
-  };
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int v = 0; v < height; ++v) {
-    const std::size_t row = static_cast<std::size_t>(v) * width;
-    sum3(&known[row], &row_known[row], width);
-    sum3(&beyond[row], &row_beyond[row], width);
+    const float d = along[i];
+    const unsigned char known = !std::isnan(d);
+    const unsigned char beyond = std::fabs(d) > scale * std::max(sigma_a[i], sigma_b[i]); // false for NaN
+    code[i] = static_cast<unsigned char>(known | (beyond << 4));
   }
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int v = 0; v < height; ++v) {
+    const unsigned char* __restrict in = &code[static_cast<std::size_t>(v) * width];
+    unsigned char* __restrict out = &rows[static_cast<std::size_t>(v) * width];
+    if (width == 1) {
+      out[0] = in[0];
+      continue;
+    }
+    out[0] = static_cast<unsigned char>(in[0] + in[1]);
+    for (int u = 1; u + 1 < width; ++u)
+      out[u] = static_cast<unsigned char>(in[u - 1] + in[u] + in[u + 1]);
+    out[width - 1] = static_cast<unsigned char>(in[width - 2] + in[width - 1]);
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
     const std::size_t row = static_cast<std::size_t>(v) * width;
-    const std::size_t above = v > 0 ? row - width : row, below = v + 1 < height ? row + width : row;
-    const unsigned char up = v > 0, down = v + 1 < height; // rows outside the frame count 0
+    const unsigned char* __restrict mid = &rows[row];
+    const unsigned char* __restrict up = v > 0 ? &rows[row - width] : nullptr;
+    const unsigned char* __restrict down = v + 1 < height ? &rows[row + width] : nullptr;
+    unsigned char* __restrict out = &changed[row];
     for (int u = 0; u < width; ++u) {
-      const int k = row_known[row + u] + up * row_known[above + u] + down * row_known[below + u];
-      const int y = row_beyond[row + u] + up * row_beyond[above + u] + down * row_beyond[below + u];
-      changed[row + u] = k > 0 && 2 * y > k;
+      const unsigned sum = mid[u] + (up ? up[u] : 0u) + (down ? down[u] : 0u);
+      const unsigned k = sum & 15u, y = sum >> 4;
+      out[u] = k > 0 && 2 * y > k;
     }
   }
 }

@@ -65,6 +65,14 @@ struct FrameComparison
 FrameComparison
 compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b, const float* sigma_b, bool test_motion,
               int threads);
+/// (p_b - p_a) . n_a of every pixel into `along` (resized to a.size()), NaN where either point is
+/// invalid or n_a is not finite; a and b of one size.
+void
+alongNormals(const Grid& a, const NormalField& normals_a, const Grid& b, int threads, std::vector<float>& along);
+/// compareFrames on the differences of alongNormals (a width x height frame).
+FrameComparison
+compareAlong(const std::vector<float>& along, int width, int height, const float* sigma_b, bool test_motion,
+             int threads);
 /// The per-pixel test of change of the guarded cross-frame bandwidths (docs/method.md, "A
 /// per-pixel test of change"): changed[i] = 1 where most of the pixels of the 3 x 3 neighbourhood
 /// of i that are valid in both frames, with a finite normal n_a, have |(p_b - p_a) . n_a| >
@@ -75,6 +83,10 @@ compareFrames(const Grid& a, const NormalField& normals_a, const Grid& b, const 
 constexpr float kChangeSigmas = 3.0f;
 void
 markChangedPixels(const Grid& a, const NormalField& normals_a, const float* sigma_a, const Grid& b,
+                  const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed);
+/// The same on the differences of alongNormals (a width x height frame).
+void
+markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
                   const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed);
 /// analyseFrameChange by `threads` threads, with the same result.
 FrameOffset

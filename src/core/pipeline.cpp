@@ -726,8 +726,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         // its frame-to-frame noise where that is larger (spatially correlated noise): its
         // patches then get s from that noise, and its points a d that also spans the distance
         // two samples of one surface point have from frame to frame (2 s^2 more in d^2).
-        // The motion test and the ratio in one pass over the two frames (detail::compareFrames),
-        // the ratio against the profile's sigma at the centre points' ranges (`sig`).
+        // The differences along the normals once (alongNormals), for the motion test, the ratio
+        // (against the profile's sigma at the centre points' ranges, `sig`) and the per-pixel
+        // test of change.
         const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
         const bool compared = k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
                                               parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded);
@@ -736,11 +737,13 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         std::vector<float>& ext = workspace.profile_extent;
         if (k != center && (own_d || own_s || compared))
           profileMap(profiles[k].range, profiles[k].sigma, rho, sig);
+        const bool guarded = parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded;
+        std::vector<float>& along = workspace.along;
+        if (compared)
+          detail::alongNormals(current, normals, *frames[k], threads, along);
         const float ratio =
-            compared ? std::max(1.0f, detail::compareFrames(current, normals, *frames[k], sig.data(),
-                                                            parameters.cross_frame_bandwidth ==
-                                                                CrossFrameBandwidth::guarded,
-                                                            threads)
+            compared ? std::max(1.0f, detail::compareAlong(along, current.width, current.height, sig.data(), guarded,
+                                                           threads)
                                           .ratio)
                      : 1.0f;
         const bool cross = ratio > 1.0f;
@@ -761,9 +764,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
           }
           // Guarded: no weight from frame k for a point whose surroundings changed from this frame
           // to frame k by far more than the noise (d = 0: only an exact match would keep weight).
-          if (k != center && parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded) {
+          if (k != center && guarded) {
             std::vector<unsigned char>& changed = workspace.changed;
-            detail::markChangedPixels(current, normals, workspace.profile_sigma.data(), *frames[k], g, ratio,
+            detail::markChangedPixels(along, current.width, current.height, workspace.profile_sigma.data(), g, ratio,
                                       threads, changed);
             const float none = detail::inverseSquareInline(0.0f);
 #pragma omp parallel for simd schedule(static) num_threads(threads)

@@ -299,7 +299,9 @@ struct Workspace
   /// Per-point ranges, profile values (the current frame's sigma, another frame's sigma,
   /// extent) and per-frame bandwidth maps of a run.
   std::vector<float> ranges, profile_sigma, other_sigma, profile_extent, range_sigma, gate;
-  /// The pixels of the current frame that changed against a neighbour (guarded cross-frame bandwidths).
+  /// A neighbour's differences to the current frame along its normals, and the pixels of the
+  /// current frame that changed against it (guarded cross-frame bandwidths).
+  std::vector<float> along;
   std::vector<unsigned char> changed;
   std::vector<std::vector<float>> inverse_d2, inverse_s2;
   /// The pre-smoothed copy the normals are fitted on.
