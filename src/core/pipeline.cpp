@@ -310,12 +310,16 @@ subsample(const std::vector<T>& from, int width, int height, int k, int u0, int 
 /// current frame and every neighbour that did not move to the mean level of those frames. The
 /// frames' noise is then what is left between them, and the offsets, noise of a camera that did
 /// not move, are averaged out. Fills `leveled` and `out` and returns true if some neighbour
-/// had such an offset; otherwise returns false and leaves the frames as they are.
+/// had such an offset; otherwise returns false and leaves the frames as they are. `moved`
+/// receives per frame whether it moved (1) or not (0, an offset counts as not moved), -1 for the
+/// current frame and an empty one; it is left empty where nothing was analysed.
 bool
 levelFrames(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
-            const Viewpoint& viewpoint, int threads, std::vector<Grid>& leveled, std::vector<const Grid*>& out)
+            const Viewpoint& viewpoint, int threads, std::vector<Grid>& leveled, std::vector<const Grid*>& out,
+            std::vector<signed char>& moved)
 {
   const int count = static_cast<int>(frames.size());
+  moved.clear();
   if (count < 2 || parameters.bandwidth_model != BandwidthModel::range_adaptive ||
       parameters.cross_frame_bandwidth != CrossFrameBandwidth::guarded)
     return false;
@@ -335,6 +339,11 @@ levelFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
     still[k] = changes[k].change != FrameChange::motion;
     any = any || changes[k].change == FrameChange::offset;
   }
+  // The motion test's answer for every frame of the run (an offset is levelled: not moved).
+  moved.assign(count, -1);
+  for (int k = 0; k < count; ++k)
+    if (k != center && frames[k]->countValid() > 0)
+      moved[k] = !still[k];
   if (!any)
     return false;
   // The mean level against the current frame's: the mean of o_k over the current frame (o = 0)
@@ -423,7 +432,7 @@ runFilter(const std::vector<const Grid*>& frames_in, int center, const FilterPar
     StageTracker stage(workspace.observer, 0);
     stage.start(Stage::neighbour_frames);
     if (!levelFrames(frames_in, center, parameters, viewpoint, detail::resolveThreads(parameters.threads),
-                     workspace.leveled, leveled))
+                     workspace.leveled, leveled, workspace.frames_moved))
       leveled = frames_in;
   }
   const std::vector<const Grid*>& frames = leveled;
@@ -463,6 +472,7 @@ runFilter(const std::vector<const Grid*>& frames_in, int center, const FilterPar
   workspace.phase.resize(1);
   Workspace& phase = workspace.phase.front();
   phase.observer = workspace.observer;
+  phase.frames_moved = workspace.frames_moved;
   for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
     for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
       for (std::size_t f = 0; f < frames.size(); ++f) {
@@ -741,11 +751,15 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         std::vector<float>& along = workspace.along;
         if (compared)
           detail::alongNormals(current, normals, *frames[k], threads, along);
-        const float ratio =
-            compared ? std::max(1.0f, detail::compareAlong(along, current.width, current.height, sig.data(), guarded,
-                                                           threads)
-                                          .ratio)
-                     : 1.0f;
+        // Guarded: whether frame k moved is the run's analysis of the input frames
+        // (analyseFrameChange, before the levelling) where there is one, else the motion test.
+        const std::vector<signed char>& known_moved = workspace.frames_moved;
+        const int analysed = guarded && known_moved.size() == static_cast<std::size_t>(count) ? known_moved[k] : -1;
+        const float ratio = compared && analysed != 1
+                                ? std::max(1.0f, detail::compareAlong(along, current.width, current.height,
+                                                                      sig.data(), guarded && analysed < 0, threads)
+                                                     .ratio)
+                                : 1.0f;
         const bool cross = ratio > 1.0f;
         if (own_d) {
           profileMap(profiles[k].range, profiles[k].extent, rho, ext);

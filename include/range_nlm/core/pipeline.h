@@ -311,8 +311,10 @@ struct Workspace
   std::vector<Grid> phase_frames;
   Grid merged;
   std::vector<Workspace> phase;
-  /// The frames brought to a common level (levelling of low-frequency offsets between frames).
+  /// The frames brought to a common level (levelling of low-frequency offsets between frames),
+  /// and per frame whether it moved against the current one (-1: not analysed).
   std::vector<Grid> leveled;
+  std::vector<signed char> frames_moved;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// If set, told where each phase of a run begins and ends. Not owned.
