@@ -53,10 +53,11 @@ enum class CrossFrameBandwidth
   /// Averaging a moved frame's surfaces along the current normals would shift the current
   /// surfaces toward them. Frames whose depth only drifted by a smooth offset along the rays
   /// (analyseFrameChange: FrameChange::offset, an active-stereo camera standing still) are
-  /// first brought to their mean level, and then count as not moved. And per pixel: a frame
-  /// gives no weight to a point whose 3 x 3 surroundings mostly differ from it by more than 3
-  /// standard deviations of the frame-to-frame noise (an object that moved in front of a still
-  /// scene; docs/method.md, "A per-pixel test of change"). The default.
+  /// first brought to their mean level, and then count as not moved. And per pixel (with the
+  /// automatic distance bandwidth of the range-adaptive model): a frame gives no weight to a
+  /// point whose 3 x 3 surroundings mostly differ from it by more than 3 standard deviations of
+  /// the frame-to-frame noise (an object that moved in front of a still scene; docs/method.md,
+  /// "A per-pixel test of change"). The default.
   guarded
 };
 
