@@ -671,19 +671,6 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
 }
 
 void
-detail::markChangedPixels(const Grid& a, const NormalField& normals_a, const float* sigma_a, const Grid& b,
-                          const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
-{
-  if (b.size() != a.size() || normals_a.size() != a.size() || a.width <= 0) {
-    changed.assign(a.size(), 0);
-    return;
-  }
-  std::vector<float> along;
-  detail::alongNormals(a, normals_a, b, threads, along);
-  detail::markChangedPixels(along, a.width, a.height, sigma_a, sigma_b, ratio, threads, changed);
-}
-
-void
 detail::markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
                           const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
 {

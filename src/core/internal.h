@@ -74,17 +74,15 @@ FrameComparison
 compareAlong(const std::vector<float>& along, int width, int height, const float* sigma_b, bool test_motion,
              int threads);
 /// The per-pixel test of change of the guarded cross-frame bandwidths (docs/method.md, "A
-/// per-pixel test of change"): changed[i] = 1 where most of the pixels of the 3 x 3 neighbourhood
-/// of i that are valid in both frames, with a finite normal n_a, have |(p_b - p_a) . n_a| >
+/// per-pixel test of change"), on the differences `along` of alongNormals(a, normals_a, b) over a
+/// width x height frame: changed[i] = 1 where most of the pixels of the 3 x 3 neighbourhood of i
+/// that are valid in both frames, with a finite normal n_a, have |(p_b - p_a) . n_a| >
 /// kChangeSigmas x sqrt(2) x ratio x max(sigma_a[i], sigma_b[i]) (a frame-to-frame difference far
 /// beyond the noise of two samples: sigma_a and sigma_b the spatial noise of each frame at the
 /// range of a's point, ratio the frame-to-frame noise ratio of b), else 0; `changed` is resized
-/// to a.size(). By `threads` threads, the same for any count.
+/// to along.size() (all 0 if that is not width x height). By `threads` threads, the same for any
+/// count.
 constexpr float kChangeSigmas = 3.0f;
-void
-markChangedPixels(const Grid& a, const NormalField& normals_a, const float* sigma_a, const Grid& b,
-                  const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed);
-/// The same on the differences of alongNormals (a width x height frame).
 void
 markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
                   const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed);

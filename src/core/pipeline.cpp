@@ -740,14 +740,14 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         // (against the profile's sigma at the centre points' ranges, `sig`) and the per-pixel
         // test of change.
         const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
-        const bool compared = k != center && (parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal ||
-                                              parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded);
+        const bool guarded = parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded;
+        const bool compared =
+            k != center && (guarded || parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal);
         // The current frame's sigma map is the noise maps' (workspace.profile_sigma).
         std::vector<float>& sig = k == center ? workspace.profile_sigma : workspace.other_sigma;
         std::vector<float>& ext = workspace.profile_extent;
         if (k != center && (own_d || own_s || compared))
           profileMap(profiles[k].range, profiles[k].sigma, rho, sig);
-        const bool guarded = parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded;
         std::vector<float>& along = workspace.along;
         if (compared)
           detail::alongNormals(current, normals, *frames[k], threads, along);

@@ -41,6 +41,15 @@ planeScene(const char* noise, int width, int height, int frames = 1)
 }
 
 const Viewpoint kOrigin{0.0f, 0.0f, 0.0f};
+
+/// detail::alongNormals of b against a.
+std::vector<float>
+alongOf(const Grid& a, const NormalField& n, const Grid& b)
+{
+  std::vector<float> along;
+  detail::alongNormals(a, n, b, 1, along);
+  return along;
+}
 } // namespace
 
 TEST(NoiseCorrelation, IndependentNoiseIsFlatOverLagsCorrelatedNoiseGrows)
@@ -514,7 +523,7 @@ TEST(FrameChange, PerPixelTestMarksWhatMovedBeyondTheNoiseAndNotTheNoise)
     detail::interpolateProfile(profile.range, profile.sigma, rho.data(), sigma.data(), a.size());
     const float ratio = std::max(1.0f, estimateTemporalNoiseRatio(a, n, b, profile, kOrigin));
     std::vector<unsigned char> changed;
-    detail::markChangedPixels(a, n, sigma.data(), b, sigma.data(), ratio, 1, changed);
+    detail::markChangedPixels(alongOf(a, n, b), a.width, a.height, sigma.data(), sigma.data(), ratio, 1, changed);
     ASSERT_EQ(changed.size(), a.size());
     const auto count = [](const std::vector<unsigned char>& c) { return std::count(c.begin(), c.end(), 1); };
     EXPECT_LT(count(changed), static_cast<long>(a.size() / 200)) << noise << " ratio " << ratio;
@@ -528,7 +537,7 @@ TEST(FrameChange, PerPixelTestMarksWhatMovedBeyondTheNoiseAndNotTheNoise)
         const float f = (len + 0.15f) / len;
         moved.x[i] *= f, moved.y[i] *= f, moved.z[i] *= f;
       }
-    detail::markChangedPixels(a, n, sigma.data(), moved, sigma.data(), ratio, 1, changed);
+    detail::markChangedPixels(alongOf(a, n, moved), a.width, a.height, sigma.data(), sigma.data(), ratio, 1, changed);
     long inside = 0, outside = 0;
     for (int v = 0; v < a.height; ++v)
       for (int u = 0; u < a.width; ++u) {
@@ -543,18 +552,18 @@ TEST(FrameChange, PerPixelTestMarksWhatMovedBeyondTheNoiseAndNotTheNoise)
     EXPECT_LT(outside, static_cast<long>(a.size() / 200)) << noise;
     for (int threads : {2, 3}) {
       std::vector<unsigned char> again;
-      detail::markChangedPixels(a, n, sigma.data(), moved, sigma.data(), ratio, threads, again);
+      detail::markChangedPixels(alongOf(a, n, moved), a.width, a.height, sigma.data(), sigma.data(), ratio, threads, again);
       EXPECT_EQ(again, changed) << threads;
     }
     // The larger of the two frames' noise sets the threshold (a smoothed neighbour, whose own
     // noise is small, is still compared at the current frame's): 150 mm is within 3 x 100 mm.
     const std::vector<float> loud(a.size(), 0.1f);
-    detail::markChangedPixels(a, n, loud.data(), moved, sigma.data(), 1.0f, 1, changed);
+    detail::markChangedPixels(alongOf(a, n, moved), a.width, a.height, loud.data(), sigma.data(), 1.0f, 1, changed);
     EXPECT_EQ(count(changed), 0) << noise;
     // A pixel invalid in either frame has no say; all invalid: nothing changed.
     Grid empty = moved;
     std::fill(empty.valid.begin(), empty.valid.end(), 0);
-    detail::markChangedPixels(a, n, sigma.data(), empty, sigma.data(), ratio, 1, changed);
+    detail::markChangedPixels(alongOf(a, n, empty), a.width, a.height, sigma.data(), sigma.data(), ratio, 1, changed);
     EXPECT_EQ(count(changed), 0);
   }
 }

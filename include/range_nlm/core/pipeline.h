@@ -122,8 +122,9 @@ struct FrameOffset
 /// Tells noise, a slowly varying offset along the rays and motion apart. The frames are cut into
 /// blocks of width / 20 pixels (at least 8); in each block with at least half its pixels valid in
 /// both frames, the median m of the range differences rho_b - rho_a and their median spread around
-/// m are taken (on every other pixel along rows and columns, as everything below). The blocks' median |m| within their median spread: `none` (as framesMoved, along
-/// the rays). Otherwise the frame changed, and it moved (`motion`) if
+/// m are taken (on every other pixel along rows and columns, as everything below). The blocks'
+/// median |m| within their median spread: `none` (as framesMoved, along the rays). Otherwise the
+/// frame changed, and it moved (`motion`) if
 ///  - fewer than 24 blocks qualify (too few to tell a drift from blocks that moved), or
 ///  - its structure moved across the image: a block is structured if shifting `b` by one or two
 ///    pixels along a row or column makes the mean absolute deviation of its differences 1.5 times
