@@ -497,6 +497,8 @@ stagesOf(const FilterParameters& p, bool temporal)
 {
   const bool adaptive = p.bandwidth_model == BandwidthModel::range_adaptive;
   std::vector<Stage> stages;
+  if (p.outlier_sigmas > 0.0f)
+    stages.push_back(Stage::outliers);
   if (p.dilation != 1)
     stages.push_back(Stage::dilation);
   if (temporal)
@@ -520,6 +522,8 @@ stageLabel(Stage stage, const FilterParameters& p, std::size_t frames)
 {
   const auto square = [](int n) { return std::to_string(n) + "x" + std::to_string(n); };
   switch (stage) {
+  case Stage::outliers:
+    return "outliers (noise profile, " + std::to_string(p.bandwidth_samples) + " samples; isolated points)";
   case Stage::dilation:
     return p.dilation == 0 ? "dilation (automatic: estimate, split into phases, merge)"
                            : "dilation " + std::to_string(p.dilation) + " (split into phases, merge)";
@@ -553,7 +557,7 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
   b.steps.push_back({"cloud -> Grid (detail::toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
                      false, true, false});
   for (Stage stage : stages)
-    b.steps.push_back({stageLabel(stage, p, count), stage != Stage::neighbour_frames && stage != Stage::dilation,
+    b.steps.push_back({stageLabel(stage, p, count), stage != Stage::outliers && stage != Stage::neighbour_frames && stage != Stage::dilation,
                        true, false});
   if (with_direct)
     b.steps.push_back({"offsets direct " + std::to_string(p.search_window) + "x" + std::to_string(p.search_window) +
@@ -589,7 +593,9 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
       runFilter(pointers, static_cast<int>(c), fast, viewpoint, {}, workspace);
       for (Stage stage : stages) {
         const double total = timer.ms[static_cast<int>(stage)];
-        ms.push_back(stage == Stage::neighbour_frames || stage == Stage::dilation ? total : total / p.iterations);
+        ms.push_back(stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation
+                       ? total
+                       : total / p.iterations);
       }
       if (with_direct) {
         StageTimer direct_timer;

@@ -47,6 +47,10 @@ public:
   /// give the same result to float precision.
   void setEvaluation(Evaluation e) { parameters_.evaluation = e; }
   Evaluation getEvaluation() const { return parameters_.evaluation; }
+  /// Isolated outliers moved onto their neighbours' surface before filtering, in noise sigmas;
+  /// 0 = off (default 10; paper preset 0). See FilterParameters::outlier_sigmas.
+  void setOutlierSigmas(float sigmas) { parameters_.outlier_sigmas = sigmas; }
+  float getOutlierSigmas() const { return parameters_.outlier_sigmas; }
   /// Displacement along the normal (default) or along the line of sight (the point stays on its
   /// camera ray).
   void setDisplacement(Displacement d) { parameters_.displacement = d; }

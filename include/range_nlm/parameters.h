@@ -152,6 +152,16 @@ struct FilterParameters
   /// (global); 0 = unlimited (the paper). A denoiser never needs to move a point by many noise
   /// sigmas; larger moves come from normals that straddle a depth edge. >= 0.
   float max_displacement = 0.0f;
+  /// Isolated outliers: before filtering, a point of the current frame farther in range than this
+  /// many noise sigmas (of the frame's noise profile at its range) from each of its valid
+  /// 8-neighbours and from the straight continuation of each neighbour's line through it, and
+  /// well beyond the range steps of its 5 x 5 surroundings, is moved along its ray to the median
+  /// range of those neighbours (correctIsolatedPoints in core/pipeline.h). These are the block
+  /// matching mismatches of structured-light sensors and the mixed ("flying") pixels of
+  /// time-of-flight cameras at depth edges, which no patch resembles, so that the non-local
+  /// weights leave them where they are. No point is removed. 0 = off (the paper). >= 0,
+  /// default 10.
+  float outlier_sigmas = 10.0f;
   /// Direction of the displacement; see Displacement. Default automatic (paper: normal).
   Displacement displacement = Displacement::automatic;
   /// Similarity bandwidth of the other frames' patches (temporal filter, range-adaptive model

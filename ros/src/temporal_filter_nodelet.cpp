@@ -2,6 +2,7 @@
 
 #include <pluginlib/class_list_macros.hpp>
 
+#include <cmath>
 #include <exception>
 #include <string>
 
@@ -87,6 +88,13 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
                                     " must be a positive number (omit it for automatic), got " + std::to_string(value));
       (std::string(name) == "distance_bandwidth" ? p.distance_bandwidth : p.similarity_bandwidth) = value;
     }
+  }
+  float outlier_sigmas = 0.0f;
+  if (readNumber(node, "outlier_sigmas", outlier_sigmas)) {
+    if (!(outlier_sigmas >= 0.0f) || !std::isfinite(outlier_sigmas))
+      throw std::invalid_argument("parameter ~outlier_sigmas must be a number >= 0 (0 = off), got " +
+                                  std::to_string(outlier_sigmas));
+    p.outlier_sigmas = outlier_sigmas;
   }
   bool flag = false;
   if (readParameter(node, "direct", flag, "a boolean") && flag)

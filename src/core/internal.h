@@ -41,6 +41,11 @@ interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, c
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint, int threads);
+/// correctIsolatedPoints on the points with `active` set (every point if empty) by `threads`
+/// threads, with the same result.
+std::size_t
+correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
+                      const std::vector<unsigned char>& active, int threads);
 /// framesMoved by `threads` threads, with the same result.
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads);

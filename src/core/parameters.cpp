@@ -56,6 +56,8 @@ FilterParameters::validate() const
     fail("line_of_sight_min_cos", line_of_sight_min_cos, "must be in [0, 1]");
   if (!(std::isfinite(max_displacement) && max_displacement >= 0.0f))
     fail("max_displacement", max_displacement, "must be finite and >= 0 (0 = unlimited)");
+  if (!(std::isfinite(outlier_sigmas) && outlier_sigmas >= 0.0f))
+    fail("outlier_sigmas", outlier_sigmas, "must be finite and >= 0 (0 = off)");
   if (!(std::isfinite(normal_presmooth_range) && normal_presmooth_range > 0.0f))
     fail("normal_presmooth_range", normal_presmooth_range, "must be finite and > 0");
 }
@@ -91,6 +93,7 @@ FilterParameters::paper()
   p.normal_edge_gate = 0.0f;
   p.bandwidth_model = BandwidthModel::global;
   p.max_displacement = 0.0f;
+  p.outlier_sigmas = 0.0f;
   p.displacement = Displacement::normal;
   p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
   p.dilation = 1;

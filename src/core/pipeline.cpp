@@ -209,6 +209,8 @@ const char*
 toString(Stage stage)
 {
   switch (stage) {
+  case Stage::outliers:
+    return "outliers";
   case Stage::dilation:
     return "dilation";
   case Stage::neighbour_frames:
@@ -418,15 +420,39 @@ detail::automaticDilation(const Grid& frame, int threads)
 }
 
 void
-runFilter(const std::vector<const Grid*>& frames_in, int center, const FilterParameters& parameters,
+runFilter(const std::vector<const Grid*>& given, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
 {
-  if (frames_in.empty() || center < 0 || center >= static_cast<int>(frames_in.size()) || !frames_in[center]) {
-    runContiguous(frames_in, center, parameters, viewpoint, active, workspace);
+  if (given.empty() || center < 0 || center >= static_cast<int>(given.size()) || !given[center]) {
+    runContiguous(given, center, parameters, viewpoint, active, workspace);
     return;
   }
   // Checked before anything runs with parameters.threads threads (OpenMP crashes on absurd counts).
   parameters.validate();
+  // The current frame's isolated outliers first, so that every later phase (noise estimates,
+  // frame comparisons, normals) sees them on their neighbours' surface.
+  std::vector<const Grid*> frames_in = given;
+  if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
+    StageTracker stage(workspace.observer, 0);
+    stage.start(Stage::outliers);
+    const Grid& input = *given[center];
+    const int threads = detail::resolveThreads(parameters.threads);
+    NoiseProfile profile;
+    try {
+      profile = detail::estimateNoiseProfile(input, parameters.search_window, parameters.bandwidth_samples,
+                                             parameters.seed, viewpoint, threads);
+    } catch (const UnfilterableFrame&) {
+      // Too few points for a noise estimate: nothing to test against (runContiguous reports it).
+    }
+    if (!profile.empty()) {
+      Grid& corrected = workspace.corrected;
+      detail::copyGrid(input, corrected, threads);
+      const bool sized = active.empty() || active.size() == input.size(); // runContiguous reports a mismatch
+      if (sized && detail::correctIsolatedPoints(corrected, profile, parameters.outlier_sigmas, viewpoint, active,
+                                                 threads) > 0)
+        frames_in[center] = &corrected;
+    }
+  }
   std::vector<const Grid*> leveled;
   {
     StageTracker stage(workspace.observer, 0);

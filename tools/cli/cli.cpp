@@ -85,6 +85,7 @@ addFilterOptions(po::options_description& options)
     ("normal-window", po::value<int>(), ("odd side of the normal-estimation neighbourhood [preset: " + std::to_string(d.normal_window) + "]").c_str())
     ("dilation", po::value<int>(), "spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is spatially correlated or strong, 1 otherwise), 1 = contiguous windows [preset: 0; paper: 1]")
     ("cross-frame", po::value<std::string>(), "temporal runs: s and d of the other frames: 'guarded' (raised to their frame-to-frame noise unless the frame moved), 'temporal' (always raised: a static camera), 'spatial' (their own spatial noise, the paper) [preset: guarded; paper: spatial]")
+    ("outlier-sigmas", po::value<float>(), "isolated outliers (structured-light mismatches, time-of-flight flying pixels) farther than this many noise sigmas from all their neighbours are moved along their ray onto the neighbours' surface before filtering; 0 = off [preset: 10; paper: 0]")
     ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
     ("line-of-sight", "move points along their camera ray instead of the normal, also when filtered alone "
                       "(default: along the ray in temporal runs, along the normal otherwise)")
@@ -128,6 +129,8 @@ filterParametersFrom(const po::variables_map& vm)
     else
       throw UsageError("--cross-frame '" + mode + "' is invalid: expected 'guarded', 'temporal' or 'spatial'");
   }
+  if (vm.count("outlier-sigmas"))
+    p.outlier_sigmas = vm["outlier-sigmas"].as<float>();
   if (vm.count("direct"))
     p.evaluation = Evaluation::direct;
   if (vm.count("line-of-sight") && vm.count("along-normal"))
@@ -208,6 +211,7 @@ double
 stageStart(Stage stage)
 {
   switch (stage) {
+  case Stage::outliers:
   case Stage::dilation:
   case Stage::neighbour_frames:
   case Stage::bandwidths:

@@ -86,6 +86,19 @@ NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint);
 
+/// Moves the isolated outliers of `grid` along their ray onto their neighbours' surface
+/// (FilterParameters::outlier_sigmas): a valid point with at least two valid 8-neighbours that is
+/// farther in range than `sigmas` times the profile's sigma at its range from every one of them
+/// and from every straight continuation 2 rho_j - rho_j' of a neighbour j and the pixel j' beyond
+/// it, and farther than 4 times the median range step between adjacent pixels of its 5 x 5
+/// surroundings, gets the median range of its valid 8-neighbours (of two middle ones, the one
+/// nearer its own). Such points are the mismatches of structured-light block matching and the
+/// mixed ("flying") pixels of time-of-flight cameras at depth edges: no patch resembles theirs,
+/// so the non-local filter leaves them where they are. Returns the number of points moved;
+/// nothing with `sigmas` <= 0 or an empty profile.
+std::size_t
+correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint);
+
 /// Whether frame `b` moved against frame `a` (camera or scene motion) rather than differing by
 /// noise: the frames are cut into blocks of width / 20 pixels (at least 8); in each block with
 /// at least half its pixels valid in both frames, the median m of (p_b - p_a) . n_a and the
@@ -248,6 +261,9 @@ runFilter(const std::vector<const Grid*>& frames, int center, const FilterParame
 /// the k^2 dilated passes (on frames of 1/k^2 the points) reports its own, iteration 0.
 enum class Stage
 {
+  /// The current frame's isolated outliers (FilterParameters::outlier_sigmas): a noise profile
+  /// and correctIsolatedPoints, once per call.
+  outliers,
   /// Dilated passes (FilterParameters::dilation): the automatic dilation's noise correlation
   /// estimate, the split of the frames into their k^2 phases and the merge of the results.
   dilation,
@@ -269,7 +285,7 @@ enum class Stage
   displacement
 };
 /// Number of Stage values.
-constexpr int kStageCount = 9;
+constexpr int kStageCount = 10;
 /// A short name of the stage ("normals", "offsets", ...).
 const char*
 toString(Stage stage);
@@ -312,6 +328,8 @@ struct Workspace
   std::vector<Grid> phase_frames;
   Grid merged;
   std::vector<Workspace> phase;
+  /// The current frame with its isolated outliers moved (FilterParameters::outlier_sigmas).
+  Grid corrected;
   /// The frames brought to a common level (levelling of low-frequency offsets between frames),
   /// and per frame whether it moved against the current one (-1: not analysed).
   std::vector<Grid> leveled;
