@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -43,6 +44,7 @@ TEST(Parameters, DefaultsAreValidAndDocumentedValues)
   EXPECT_EQ(paper.distance_scale, 0.75f);
   EXPECT_EQ(paper.similarity_scale, 1.0f);
   EXPECT_EQ(paper.bandwidth_model, range_nlm::BandwidthModel::global);
+  EXPECT_EQ(paper.outlier_sigmas, 0.0f);
   EXPECT_NO_THROW(p.validate());
   EXPECT_NO_THROW(FilterParameters::recommended().validate());
   EXPECT_NO_THROW(FilterParameters::paper().validate());
@@ -87,6 +89,11 @@ TEST(Parameters, OtherInvalidValuesAreRejectedByName)
   p = FilterParameters();
   p.max_displacement = -2.0f;
   EXPECT_NE(messageOf(p).find("max_displacement"), std::string::npos);
+  p = FilterParameters();
+  p.outlier_sigmas = -1.0f;
+  EXPECT_NE(messageOf(p).find("outlier_sigmas"), std::string::npos);
+  p.outlier_sigmas = std::numeric_limits<float>::infinity();
+  EXPECT_NE(messageOf(p).find("outlier_sigmas"), std::string::npos);
   p = FilterParameters();
   p.bandwidth_samples = 0;
   EXPECT_NE(messageOf(p).find("bandwidth_samples"), std::string::npos);

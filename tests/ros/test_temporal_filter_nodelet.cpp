@@ -225,6 +225,8 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   // The options added to the tool are parameters too: a dilation of 2 changes every output.
   ros::param::set("/rnlm_centred/dilation", 2);
   ros::param::set("/rnlm_centred/cross_frame", std::string("spatial"));
+  // Outliers left where they are: each frame below has one, which the default would move.
+  ros::param::set("/rnlm_centred/outlier_sigmas", 0.0);
   ChildProcess node({nodeExecutable(), "__name:=rnlm_centred", "input:=/centred/in", "output:=/centred/out"},
                     g_master->directory() + "/rnlm_centred.log");
   ros::NodeHandle nh;
@@ -235,10 +237,17 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   FilterParameters centred = testParameters();
   centred.dilation = 2;
   centred.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
+  centred.outlier_sigmas = 0.0f;
   TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::centred, centred);
   std::vector<Cloud::Ptr> frames;
   for (int k = 0; k < 4; ++k) {
     frames.push_back(frame(k));
+    Cloud& c = *frames.back();
+    std::size_t i = std::size_t(20) * c.width + 10;
+    while (!std::isfinite(c[i].z)) // a point, not a hole
+      ++i;
+    const float f = 1.0f - 0.3f / std::sqrt(c[i].x * c[i].x + c[i].y * c[i].y + c[i].z * c[i].z);
+    c[i].x *= f, c[i].y *= f, c[i].z *= f; // 30 cm toward the sensor along its ray
     input.publish(toPointCloud2(*frames.back(), 10 + k, 0));
     const auto ready = expected.push(frames.back());
     if (k == 0) {
