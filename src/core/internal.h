@@ -41,6 +41,20 @@ interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, c
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint, int threads);
+/// An isolated outlier found by findIsolatedPoints: its index and the range it is moved to.
+struct IsolatedPoint
+{
+  std::size_t index;
+  float range;
+};
+/// The isolated outliers of correctIsolatedPoints among the points with `active` set (every point
+/// if empty), in index order, by `threads` threads with the same result; `grid` is not changed.
+std::vector<IsolatedPoint>
+findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
+                   const std::vector<unsigned char>& active, int threads);
+/// Moves each point along its ray to its new range.
+void
+moveIsolatedPoints(Grid& grid, const std::vector<IsolatedPoint>& points, const Viewpoint& viewpoint);
 /// correctIsolatedPoints on the points with `active` set (every point if empty) by `threads`
 /// threads, with the same result.
 std::size_t

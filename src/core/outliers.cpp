@@ -29,45 +29,90 @@ std::size_t
 detail::correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
                               const std::vector<unsigned char>& active, int threads)
 {
+  const std::vector<IsolatedPoint> found = findIsolatedPoints(grid, profile, sigmas, viewpoint, active, threads);
+  moveIsolatedPoints(grid, found, viewpoint);
+  return found.size();
+}
+
+void
+detail::moveIsolatedPoints(Grid& grid, const std::vector<IsolatedPoint>& points, const Viewpoint& viewpoint)
+{
+  for (const IsolatedPoint& q : points) {
+    const std::size_t i = q.index;
+    const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
+    const float f = q.range / std::sqrt(dx * dx + dy * dy + dz * dz);
+    grid.x[i] = viewpoint[0] + dx * f;
+    grid.y[i] = viewpoint[1] + dy * f;
+    grid.z[i] = viewpoint[2] + dz * f;
+  }
+}
+
+std::vector<detail::IsolatedPoint>
+detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
+                           const std::vector<unsigned char>& active, int threads)
+{
   const int width = grid.width, height = grid.height;
   const std::size_t n = grid.size();
+  std::vector<IsolatedPoint> found;
   if (!(sigmas > 0.0f) || profile.empty() || width <= 0 || height <= 0)
-    return 0;
+    return found;
   threads = detail::resolveThreads(threads);
-  std::vector<float> rho(n, 0.0f), tolerance(n, 0.0f);
-  (void)threads;
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (std::size_t i = 0; i < n; ++i)
-    if (grid.valid[i]) {
-      const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
-      rho[i] = std::sqrt(dx * dx + dy * dy + dz * dz);
-    }
+  std::vector<float> rho(n);
   {
-    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n), block = 4096;
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (std::ptrdiff_t lo = 0; lo < size; lo += block)
-      detail::interpolateProfile(profile.range, profile.sigma, &rho[lo], &tolerance[lo],
-                                 static_cast<std::size_t>(std::min(block, size - lo)));
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+    const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+    const float* __restrict x = grid.x.data();
+    const float* __restrict y = grid.y.data();
+    const float* __restrict z = grid.z.data();
+    const unsigned char* __restrict valid = grid.valid.data();
+    float* __restrict out = rho.data();
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+    for (std::ptrdiff_t i = 0; i < size; ++i) {
+      const float dx = x[i] - vx, dy = y[i] - vy, dz = z[i] - vz;
+      const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      out[i] = valid[i] ? r : 0.0f;
+    }
   }
+  // Most points are within the smallest tolerance of the profile of their first neighbour; the
+  // tolerance at their own range is looked up only for the others.
+  const float smallest = sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end());
   const auto validAt = [&](int u, int v) {
     return u >= 0 && v >= 0 && u < width && v < height && grid.valid[static_cast<std::size_t>(v) * width + u];
   };
-  // The new range of every outlier (0 elsewhere), from the input's ranges only: rows are
-  // independent, so the result does not depend on the number of threads.
-  std::vector<float> target(n, 0.0f);
+  // Rows are independent and each thread's finds are merged in row order: the result does not
+  // depend on the number of threads.
+  std::vector<std::vector<IsolatedPoint>> rows(height);
 #pragma omp parallel num_threads(threads)
   {
     std::vector<float> steps;
+    std::vector<unsigned char> candidate(width);
 #pragma omp for schedule(dynamic, 8)
-    for (int v = 0; v < height; ++v)
+    for (int v = 0; v < height; ++v) {
+      // Inside the frame, a point within the smallest tolerance of one of its 8 neighbours is no
+      // outlier: one branch-free pass over the row (an invalid neighbour has range 0 and a valid
+      // point a positive one). The others, and the frame's border, take the whole test.
+      std::fill(candidate.begin(), candidate.end(), 1);
+      if (v > 0 && v + 1 < height) {
+        const float* __restrict above = &rho[static_cast<std::size_t>(v - 1) * width];
+        const float* __restrict row = &rho[static_cast<std::size_t>(v) * width];
+        const float* __restrict below = &rho[static_cast<std::size_t>(v + 1) * width];
+        unsigned char* __restrict flag = candidate.data();
+        for (int u = 1; u + 1 < width; ++u) {
+          const float r = row[u];
+          const auto close = [&](float q) { return (q > 0.0f) & (std::fabs(q - r) <= smallest); };
+          const bool agrees = close(above[u - 1]) | close(above[u]) | close(above[u + 1]) | close(row[u - 1]) |
+                              close(row[u + 1]) | close(below[u - 1]) | close(below[u]) | close(below[u + 1]);
+          flag[u] = !agrees;
+        }
+      }
       for (int u = 0; u < width; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * width + u;
-        if (!grid.valid[i] || (!active.empty() && !active[i]) || !(rho[i] > 0.0f))
+        if (!candidate[u] || !grid.valid[i] || (!active.empty() && !active[i]) || !(rho[i] > 0.0f))
           continue;
-        const float r = rho[i], tol = sigmas * tolerance[i];
+        const float r = rho[i];
         // Close to a neighbour, or to the straight continuation of a neighbour's line through
         // the next pixel beyond it (a surface steep to the ray): not an outlier.
-        float neighbours[8];
+        float neighbours[8], continued[8];
         int count = 0;
         bool agrees = false;
         for (int dv = -1; dv <= 1 && !agrees; ++dv)
@@ -75,20 +120,22 @@ detail::correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sig
             if ((du == 0 && dv == 0) || !validAt(u + du, v + dv))
               continue;
             const float near = rho[static_cast<std::size_t>(v + dv) * width + u + du];
-            neighbours[count++] = near;
-            if (std::fabs(near - r) <= tol) {
+            const float line = validAt(u + 2 * du, v + 2 * dv)
+                                   ? 2.0f * near - rho[static_cast<std::size_t>(v + 2 * dv) * width + u + 2 * du]
+                                   : near;
+            if (std::fabs(near - r) <= smallest || std::fabs(line - r) <= smallest) {
               agrees = true;
               break;
             }
-            if (validAt(u + 2 * du, v + 2 * dv)) {
-              const float far = rho[static_cast<std::size_t>(v + 2 * dv) * width + u + 2 * du];
-              if (std::fabs(2.0f * near - far - r) <= tol) {
-                agrees = true;
-                break;
-              }
-            }
+            neighbours[count] = near;
+            continued[count++] = line;
           }
         if (agrees || count < 2)
+          continue;
+        const float tol = sigmas * profile.sigmaAt(r);
+        for (int k = 0; k < count && !agrees; ++k)
+          agrees = std::fabs(neighbours[k] - r) <= tol || std::fabs(continued[k] - r) <= tol;
+        if (agrees)
           continue;
         // Surroundings whose own range steps are large (a surface at a grazing angle, where the
         // noise along the ray exceeds the profile's) keep their points.
@@ -115,20 +162,13 @@ detail::correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sig
           for (int b = a; b > 0 && neighbours[b] < neighbours[b - 1]; --b)
             std::swap(neighbours[b], neighbours[b - 1]);
         const float low = neighbours[(count - 1) / 2], high = neighbours[count / 2];
-        target[i] = std::fabs(low - r) <= std::fabs(high - r) ? low : high;
+        rows[v].push_back(IsolatedPoint{i, std::fabs(low - r) <= std::fabs(high - r) ? low : high});
       }
+    }
   }
-  std::size_t moved = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(target[i] > 0.0f))
-      continue;
-    const float f = target[i] / rho[i];
-    grid.x[i] = viewpoint[0] + (grid.x[i] - viewpoint[0]) * f;
-    grid.y[i] = viewpoint[1] + (grid.y[i] - viewpoint[1]) * f;
-    grid.z[i] = viewpoint[2] + (grid.z[i] - viewpoint[2]) * f;
-    ++moved;
-  }
-  return moved;
+  for (const std::vector<IsolatedPoint>& row : rows)
+    found.insert(found.end(), row.begin(), row.end());
+  return found;
 }
 
 } // namespace range_nlm

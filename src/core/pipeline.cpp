@@ -444,13 +444,15 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     } catch (const UnfilterableFrame&) {
       // Too few points for a noise estimate: nothing to test against (runContiguous reports it).
     }
-    if (!profile.empty()) {
-      Grid& corrected = workspace.corrected;
-      detail::copyGrid(input, corrected, threads);
-      const bool sized = active.empty() || active.size() == input.size(); // runContiguous reports a mismatch
-      if (sized && detail::correctIsolatedPoints(corrected, profile, parameters.outlier_sigmas, viewpoint, active,
-                                                 threads) > 0)
-        frames_in[center] = &corrected;
+    const bool sized = active.empty() || active.size() == input.size(); // runContiguous reports a mismatch
+    if (!profile.empty() && sized) {
+      const std::vector<detail::IsolatedPoint> found =
+          detail::findIsolatedPoints(input, profile, parameters.outlier_sigmas, viewpoint, active, threads);
+      if (!found.empty()) {
+        detail::copyGrid(input, workspace.corrected, threads);
+        detail::moveIsolatedPoints(workspace.corrected, found, viewpoint);
+        frames_in[center] = &workspace.corrected;
+      }
     }
   }
   std::vector<const Grid*> leveled;
