@@ -79,6 +79,27 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   const auto validAt = [&](int u, int v) {
     return u >= 0 && v >= 0 && u < width && v < height && grid.valid[static_cast<std::size_t>(v) * width + u];
   };
+  // Whether point (a, b) lies on a surface with one of its valid 8-neighbours other than pixel
+  // (skip_a, skip_b): within `sigmas` noise sigmas at its range of the neighbour's range, or of the
+  // straight continuation 2 rho_j - rho_j' of the line from the pixel j' beyond the neighbour
+  // (a surface steep to the rays).
+  const auto onSurface = [&](int a, int b, int skip_a, int skip_b) {
+    const float r = rho[static_cast<std::size_t>(b) * width + a];
+    const float tol = sigmas * profile.sigmaAt(r);
+    for (int dv = -1; dv <= 1; ++dv)
+      for (int du = -1; du <= 1; ++du) {
+        const int c = a + du, d = b + dv, e = c + du, f = d + dv;
+        if ((du == 0 && dv == 0) || (c == skip_a && d == skip_b) || !validAt(c, d))
+          continue;
+        const float near = rho[static_cast<std::size_t>(d) * width + c];
+        if (std::fabs(near - r) <= tol)
+          return true;
+        if (validAt(e, f) && !(e == skip_a && f == skip_b) &&
+            std::fabs(2.0f * near - rho[static_cast<std::size_t>(f) * width + e] - r) <= tol)
+          return true;
+      }
+    return false;
+  };
   // Rows are independent and each thread's finds are merged in row order: the result does not
   // depend on the number of threads.
   std::vector<std::vector<IsolatedPoint>> rows(height);
@@ -107,35 +128,17 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
       }
       for (int u = 0; u < width; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * width + u;
-        if (!candidate[u] || !grid.valid[i] || (!active.empty() && !active[i]) || !(rho[i] > 0.0f))
+        if (!candidate[u] || !grid.valid[i] || (!active.empty() && !active[i]) || !(rho[i] > 0.0f) ||
+            onSurface(u, v, -1, -1))
           continue;
         const float r = rho[i];
-        // Close to a neighbour, or to the straight continuation of a neighbour's line through
-        // the next pixel beyond it (a surface steep to the ray): not an outlier.
-        float neighbours[8], continued[8];
+        float neighbours[8];
         int count = 0;
-        bool agrees = false;
-        for (int dv = -1; dv <= 1 && !agrees; ++dv)
-          for (int du = -1; du <= 1; ++du) {
-            if ((du == 0 && dv == 0) || !validAt(u + du, v + dv))
-              continue;
-            const float near = rho[static_cast<std::size_t>(v + dv) * width + u + du];
-            const float line = validAt(u + 2 * du, v + 2 * dv)
-                                   ? 2.0f * near - rho[static_cast<std::size_t>(v + 2 * dv) * width + u + 2 * du]
-                                   : near;
-            if (std::fabs(near - r) <= smallest || std::fabs(line - r) <= smallest) {
-              agrees = true;
-              break;
-            }
-            neighbours[count] = near;
-            continued[count++] = line;
-          }
-        if (agrees || count < 2)
-          continue;
-        const float tol = sigmas * profile.sigmaAt(r);
-        for (int k = 0; k < count && !agrees; ++k)
-          agrees = std::fabs(neighbours[k] - r) <= tol || std::fabs(continued[k] - r) <= tol;
-        if (agrees)
+        for (int dv = -1; dv <= 1; ++dv)
+          for (int du = -1; du <= 1; ++du)
+            if ((du != 0 || dv != 0) && validAt(u + du, v + dv))
+              neighbours[count++] = rho[static_cast<std::size_t>(v + dv) * width + u + du];
+        if (count < 2)
           continue;
         // Surroundings whose own range steps are large (a surface at a grazing angle, where the
         // noise along the ray exceeds the profile's) keep their points.
@@ -156,12 +159,21 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
           if (std::any_of(neighbours, neighbours + count, [&](float q) { return std::fabs(q - r) <= typical; }))
             continue;
         }
-        // The median neighbour; of two middle ones the one nearer the point (a mean of two
-        // could fall between two surfaces).
-        for (int a = 1; a < count; ++a) // insertion sort of at most 8 values
+        // The neighbours that lie on a surface themselves (next to a time-of-flight edge, half
+        // of them may be mixed pixels too); none: the point stays, nothing tells where it belongs.
+        int kept = 0;
+        for (int dv = -1; dv <= 1; ++dv)
+          for (int du = -1; du <= 1; ++du)
+            if ((du != 0 || dv != 0) && validAt(u + du, v + dv) && onSurface(u + du, v + dv, u, v))
+              neighbours[kept++] = rho[static_cast<std::size_t>(v + dv) * width + u + du];
+        if (kept == 0)
+          continue;
+        // Their median; of two middle ones the one nearer the point (a mean of two could fall
+        // between two surfaces).
+        for (int a = 1; a < kept; ++a) // insertion sort of at most 8 values
           for (int b = a; b > 0 && neighbours[b] < neighbours[b - 1]; --b)
             std::swap(neighbours[b], neighbours[b - 1]);
-        const float low = neighbours[(count - 1) / 2], high = neighbours[count / 2];
+        const float low = neighbours[(kept - 1) / 2], high = neighbours[kept / 2];
         rows[v].push_back(IsolatedPoint{i, std::fabs(low - r) <= std::fabs(high - r) ? low : high});
       }
     }

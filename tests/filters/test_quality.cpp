@@ -310,7 +310,7 @@ TEST(Quality, StructuredLightMismatchesAndFlyingPixelsAreMovedOntoASurface)
   print("kinect1 outliers left", s_off);
   print("tof default", t_def);
   print("tof outliers left", t_off);
-  // Measured: kinect1 1.149 / 2.403 mm against 1.149 / 6.010 mm; tof 0.481 / 110.46 mm against
+  // Measured: kinect1 1.149 / 2.403 mm against 1.149 / 6.010 mm; tof 0.480 / 100.82 mm against
   // 0.480 / 151.61 mm.
   EXPECT_LT(s_def.feature_rmse, 3.0e-3);
   EXPECT_LT(s_def.feature_rmse, 0.5 * s_off.feature_rmse);
