@@ -41,6 +41,10 @@ interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, c
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint, int threads);
+/// The range |p - viewpoint| of every point of `grid` into `rho` (0 for invalid points), by
+/// `threads` threads.
+void
+rangesOf(const Grid& grid, const Viewpoint& viewpoint, int threads, std::vector<float>& rho);
 /// An isolated outlier found by findIsolatedPoints: its index and the range it is moved to.
 struct IsolatedPoint
 {

@@ -52,27 +52,12 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
                            const std::vector<unsigned char>& active, int threads)
 {
   const int width = grid.width, height = grid.height;
-  const std::size_t n = grid.size();
   std::vector<IsolatedPoint> found;
   if (!(sigmas > 0.0f) || profile.empty() || width <= 0 || height <= 0)
     return found;
   threads = detail::resolveThreads(threads);
-  std::vector<float> rho(n);
-  {
-    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
-    const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
-    const float* __restrict x = grid.x.data();
-    const float* __restrict y = grid.y.data();
-    const float* __restrict z = grid.z.data();
-    const unsigned char* __restrict valid = grid.valid.data();
-    float* __restrict out = rho.data();
-#pragma omp parallel for simd schedule(static) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < size; ++i) {
-      const float dx = x[i] - vx, dy = y[i] - vy, dz = z[i] - vz;
-      const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
-      out[i] = valid[i] ? r : 0.0f;
-    }
-  }
+  std::vector<float> rho;
+  detail::rangesOf(grid, viewpoint, threads, rho);
   // Most points are within the smallest tolerance of the profile of their first neighbour; the
   // tolerance at their own range is looked up only for the others.
   const float smallest = sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end());

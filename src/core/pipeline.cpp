@@ -205,6 +205,26 @@ temporalNoiseWeight(float s_k, float s_max)
   return std::exp(-ratio * ratio);
 }
 
+void
+detail::rangesOf(const Grid& grid, const Viewpoint& viewpoint, int threads, std::vector<float>& rho)
+{
+  rho.resize(grid.size());
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(grid.size());
+  const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+  const float* __restrict x = grid.x.data();
+  const float* __restrict y = grid.y.data();
+  const float* __restrict z = grid.z.data();
+  const unsigned char* __restrict valid = grid.valid.data();
+  float* __restrict out = rho.data();
+  (void)threads;
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    const float dx = x[i] - vx, dy = y[i] - vy, dz = z[i] - vz;
+    const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+    out[i] = valid[i] ? r : 0.0f;
+  }
+}
+
 const char*
 toString(Stage stage)
 {
@@ -597,22 +617,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     detail::copyGrid(input, run.output, threads);
 
   // Range of every centre point (the per-point bandwidths are functions of it).
-  auto rangesInto = [&](const Grid& g, std::vector<float>& rho) {
-    rho.resize(g.size());
-    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(g.size());
-    const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
-    const float* __restrict x = g.x.data();
-    const float* __restrict y = g.y.data();
-    const float* __restrict z = g.z.data();
-    const unsigned char* __restrict valid = g.valid.data();
-    float* __restrict out = rho.data();
-#pragma omp parallel for simd schedule(static) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < size; ++i) {
-      const float dx = x[i] - vx, dy = y[i] - vy, dz = z[i] - vz;
-      const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
-      out[i] = valid[i] ? r : 0.0f;
-    }
-  };
+  auto rangesInto = [&](const Grid& g, std::vector<float>& rho) { detail::rangesOf(g, viewpoint, threads, rho); };
   auto medianRange = [&](const Grid& g, const std::vector<float>& rho) {
     return detail::medianOfNonNegative(rho.data(), g.valid.data(), g.size(), threads);
   };
