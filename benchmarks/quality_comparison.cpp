@@ -109,7 +109,9 @@ rangeNlmVariants(bool include_levers)
   v.emplace_back("  + 9x9 search, 3x3 patch", p);
   p.dilation = 0;
   p.cross_frame_bandwidth = CrossFrameBandwidth::guarded;
-  v.emplace_back("  + automatic dilation, guarded cross-frame bandwidths (= default)", p);
+  v.emplace_back("  + automatic dilation, guarded cross-frame bandwidths", p);
+  p.outlier_sigmas = 10.0f;
+  v.emplace_back("  + isolated outliers moved onto their neighbours' surface (= default)", p);
   FilterParameters q = FilterParameters::recommended();
   q.displacement = Displacement::line_of_sight;
   v.emplace_back("default + line of sight", q);

@@ -157,6 +157,8 @@ describe(const Settings& s)
     << " bandwidths";
   if (p.displacement == Displacement::line_of_sight)
     d << ", line of sight";
+  if (p.outlier_sigmas > 0.0f)
+    d << ", isolated outliers at " << p.outlier_sigmas << " sigma";
   return d.str();
 }
 
