@@ -167,6 +167,8 @@ struct FrameReport
   Bandwidths bandwidths;
   /// Why it was written unchanged (empty: filtered).
   std::string unfiltered;
+  /// Isolated outliers moved onto their neighbours' surface (all passes).
+  std::size_t outliers_moved = 0;
 };
 
 /// What became of one input frame that came out of the chain.
@@ -231,6 +233,7 @@ private:
         l.carried.pop_front();
         if (level > 0) {
           o.info.milliseconds += before.milliseconds;
+          o.info.outliers_moved += before.outliers_moved;
           o.info.bandwidths = before.bandwidths;
           if (!before.problem.empty())
             o.info.problem = before.problem;
@@ -958,11 +961,14 @@ private:
       throw InputError("'" + frame.output_path + "': out of memory while writing the frame");
     }
     const std::string name = fileName(frame.output_path);
-    FrameReport report{name, result.info.milliseconds, result.info.bandwidths, result.info.problem};
+    FrameReport report{name, result.info.milliseconds, result.info.bandwidths, result.info.problem,
+                       result.info.outliers_moved};
     if (!job_.quiet && !job_.json) {
       if (report.unfiltered.empty())
         std::cout << name << ": " << std::fixed << std::setprecision(1) << report.milliseconds << " ms, d = "
                   << std::setprecision(6) << report.bandwidths.distance << ", s = " << report.bandwidths.similarity
+                  << (report.outliers_moved > 0 ? ", " + std::to_string(report.outliers_moved) + " outliers moved"
+                                                : std::string())
                   << std::endl;
       else
         std::cout << name << ": not filtered, written unchanged (" << report.unfiltered << ")" << std::endl;
@@ -1015,6 +1021,7 @@ printJson(const Summary& s, const Job& job)
                         {"ms", r.milliseconds},
                         {"distance_bandwidth", r.bandwidths.distance},
                         {"similarity_bandwidth", r.bandwidths.similarity},
+                        {"outliers_moved", r.outliers_moved},
                         {"filtered", r.unfiltered.empty()}};
     if (!r.unfiltered.empty()) {
       o["reason"] = r.unfiltered;

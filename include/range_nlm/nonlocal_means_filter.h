@@ -37,6 +37,9 @@ public:
   float getEstimatedSimilarityBandwidth() const { return bandwidths_.similarity; }
   /// mu_d and sigma_s as estimated by the last filter() call.
   const Bandwidths& getBandwidths() const { return bandwidths_; }
+  /// Isolated outliers moved onto their neighbours' surface by the last filter() call
+  /// (FilterParameters::outlier_sigmas).
+  std::size_t getOutliersMoved() const { return workspace_.run.outliers_moved; }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.

@@ -48,6 +48,9 @@ public:
   const std::vector<float>& getFrameWeights() const { return frame_weights_; }
   /// Bandwidths per frame of the last filter() call.
   const std::vector<Bandwidths>& getFrameBandwidths() const { return frame_bandwidths_; }
+  /// Isolated outliers of the current frame moved onto their neighbours' surface by the last
+  /// filter() call (FilterParameters::outlier_sigmas).
+  std::size_t getOutliersMoved() const { return workspace_.run.outliers_moved; }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.

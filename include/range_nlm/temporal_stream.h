@@ -85,6 +85,8 @@ public:
     Bandwidths bandwidths;
     /// Time the filter took for it, milliseconds.
     double milliseconds = 0.0;
+    /// Its isolated outliers moved onto their neighbours' surface (FilterParameters::outlier_sigmas).
+    std::size_t outliers_moved = 0;
   };
   /// One entry per frame returned by the last push() or flush(), in the same order.
   const std::vector<OutputInfo>& lastOutputs() const { return last_outputs_; }

@@ -452,6 +452,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   // The current frame's isolated outliers first, so that every later phase (noise estimates,
   // frame comparisons, normals) sees them on their neighbours' surface.
   std::vector<const Grid*> frames_in = given;
+  workspace.run.outliers_moved = 0; // every path below keeps it
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
@@ -472,6 +473,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
         detail::copyGrid(input, workspace.corrected, threads);
         detail::moveIsolatedPoints(workspace.corrected, found, viewpoint);
         frames_in[center] = &workspace.corrected;
+        workspace.run.outliers_moved = found.size();
       }
     }
   }

@@ -336,6 +336,9 @@ TEST(NonLocalMeansFilter, ThreadCountDoesNotChangeOutput)
 {
   Cloud in = test::makeCloud(70, 50, test::step(33, 1.0, 1.04), 0.004, 12);
   test::punchHoles(in, 0.1, 13);
+  for (std::size_t i : {std::size_t(10) * 70 + 10, std::size_t(30) * 70 + 50}) // isolated outliers too
+    if (std::isfinite(in[i].z))
+      in[i].getVector3fMap() *= 0.7f;
   for (Evaluation e : {Evaluation::fast, Evaluation::direct}) {
     FilterParameters p = FilterParameters::recommended();
     p.evaluation = e;
@@ -541,4 +544,41 @@ TEST(NonLocalMeansFilter, AbsurdThreadCountIsRefusedNotCrashed)
   f.setNumberOfThreads(100000);
   Cloud out;
   EXPECT_NE(errorOf([&] { f.filter(out); }).find("threads = 100000"), std::string::npos);
+}
+
+TEST(NonLocalMeansFilter, IsolatedOutliersAreMovedOntoTheSurfaceAndCounted)
+{
+  // A noisy plane with three points pushed along their rays 30 % toward the sensor (about
+  // 0.45 m): the default moves them back onto the plane (along their rays, then the filter moves
+  // them along their normals like every point) and says how many it moved; with
+  // outlier_sigmas 0 they stay where they are (no patch resembles theirs).
+  const Cloud plane = noisyPlane(0.002, 3);
+  Cloud spiky = plane;
+  const std::vector<std::size_t> spikes{std::size_t(5) * 48 + 7, std::size_t(20) * 48 + 24, std::size_t(33) * 48 + 40};
+  for (std::size_t i : spikes)
+    spiky[i].getVector3fMap() *= 0.7f;
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(spiky)));
+  Cloud out;
+  f.filter(out);
+  EXPECT_EQ(f.getOutliersMoved(), spikes.size());
+  FilterParameters off = FilterParameters::recommended();
+  off.outlier_sigmas = 0.0f;
+  NonLocalMeansFilter<pcl::PointXYZ> g;
+  g.setParameters(off);
+  g.setInputCloud(Cloud::ConstPtr(new Cloud(spiky)));
+  Cloud kept;
+  g.filter(kept);
+  EXPECT_EQ(g.getOutliersMoved(), 0u);
+  for (std::size_t i : spikes) {
+    // On the plane n . p = offset to within the noise, and on its own ray.
+    const Eigen::Vector3d n = kPlaneNormal.normalized();
+    const double offset = kPlaneOffset / kPlaneNormal.norm();
+    EXPECT_LT(std::fabs(n.dot(out[i].getVector3fMap().cast<double>()) - offset), 0.01) << i;
+    EXPECT_GT(std::fabs(n.dot(kept[i].getVector3fMap().cast<double>()) - offset), 0.3) << i;
+  }
+  // The count is the last call's: a frame without outliers gives 0.
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(plane)));
+  f.filter(out);
+  EXPECT_EQ(f.getOutliersMoved(), 0u);
 }

@@ -472,3 +472,22 @@ TEST(TemporalFilter, CloudsWhoseGridDisagreesWithTheirPointsAreRejectedEverywher
     expectInvalid([&] { later.push(bad); });
   }
 }
+
+TEST(TemporalFilter, StreamReportsTheIsolatedOutliersOfEachFrame)
+{
+  // Frame 1 of three has two points pushed 30 % toward the sensor along their rays: the stream's
+  // record of that frame counts them, the others count none, and the temporal filter's count is
+  // its current frame's.
+  auto frames = sequence(3, 0, 0.003, 800);
+  Cloud spiky = *frames[1];
+  for (std::size_t i : {std::size_t(8) * 48 + 9, std::size_t(25) * 48 + 30})
+    spiky[i].getVector3fMap() *= 0.7f;
+  frames[1].reset(new Cloud(spiky));
+  TemporalStream<pcl::PointXYZ> stream(1, TemporalWindow::causal, FilterParameters::recommended());
+  std::vector<std::size_t> moved;
+  for (const auto& f : frames) {
+    ASSERT_EQ(stream.push(f).size(), 1u);
+    moved.push_back(stream.lastOutputs().front().outliers_moved);
+  }
+  EXPECT_EQ(moved, (std::vector<std::size_t>{0, 2, 0}));
+}

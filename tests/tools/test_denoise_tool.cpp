@@ -102,8 +102,12 @@ TEST_F(DenoiseTool, DirectoryModeFiltersEveryFrameInNameOrder)
 
 TEST_F(DenoiseTool, TemporalAndPassScheduleProduceOneOutputPerFrame)
 {
-  for (int k = 0; k < 4; ++k)
-    pcl::io::savePCDFileBinary(path("in/f" + std::to_string(k) + ".pcd"), frame(20 + k));
+  for (int k = 0; k < 4; ++k) {
+    auto c = frame(20 + k);
+    if (k == 2) // an isolated outlier, 30 % nearer along its ray
+      c.at(5, 20).getVector3fMap() *= 0.7f;
+    pcl::io::savePCDFileBinary(path("in/f" + std::to_string(k) + ".pcd"), c);
+  }
   Result r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("t") + " --temporal-radius 1 --json");
   ASSERT_EQ(r.status, 0) << r.output;
   const nlohmann::json summary = test::jsonLine(r.output);
@@ -113,6 +117,7 @@ TEST_F(DenoiseTool, TemporalAndPassScheduleProduceOneOutputPerFrame)
   for (int k = 0; k < 4; ++k) {
     EXPECT_EQ(summary["outputs"][k]["file"], "f" + std::to_string(k) + ".pcd");
     EXPECT_GT(summary["outputs"][k]["similarity_bandwidth"].get<double>(), 0.0);
+    EXPECT_EQ(summary["outputs"][k]["outliers_moved"], k == 2 ? 1 : 0) << r.output;
   }
   EXPECT_NE(summary["outputs"][2]["similarity_bandwidth"], summary["outputs"][3]["similarity_bandwidth"]);
   r = test::runDenoise("--input-dir " + path("in") + " --output-dir " + path("p") +

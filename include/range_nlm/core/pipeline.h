@@ -248,6 +248,9 @@ struct FilterRun
   std::vector<Bandwidths> bandwidths;
   /// Psi_k = Psi_dk * Psi_sk per frame of the first iteration.
   std::vector<float> frame_weights;
+  /// Isolated outliers of the current frame moved onto their neighbours' surface before
+  /// filtering (FilterParameters::outlier_sigmas).
+  std::size_t outliers_moved = 0;
 };
 
 /// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.

@@ -84,6 +84,7 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   last_weights_ = filter_.getFrameWeights();
   last_bandwidths_ = filter_.getFrameBandwidths()[current];
   last_outputs_.back().bandwidths = last_bandwidths_;
+  last_outputs_.back().outliers_moved = filter_.getOutliersMoved();
   last_outputs_.back().milliseconds = elapsed();
   remember(out);
   return out;
