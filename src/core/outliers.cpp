@@ -14,8 +14,9 @@ namespace
 {
 /// Adjacent pairs (right and down neighbours) of the 5 x 5 window around a pixel.
 constexpr int kSurroundReach = 2;
+constexpr int kSide = 2 * kSurroundReach + 1;
 /// An outlier must also be farther from every neighbour than this many times the median range
-/// step between adjacent pixels of its 5 x 5 surroundings.
+/// step between adjacent pixels of its 5 x 5 surroundings that lie on a surface.
 constexpr float kSurroundSteps = 4.0f;
 } // namespace
 
@@ -126,17 +127,25 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
         if (count < 2)
           continue;
         // Surroundings whose own range steps are large (a surface at a grazing angle, where the
-        // noise along the ray exceeds the profile's) keep their points.
+        // noise along the ray exceeds the profile's) keep their points. The steps are taken
+        // between points that lie on a surface: next to a time-of-flight edge half the pixels
+        // may be mixed, and their steps would make every step look ordinary.
         steps.clear();
-        for (int b = v - kSurroundReach; b <= v + kSurroundReach; ++b)
-          for (int a = u - kSurroundReach; a <= u + kSurroundReach; ++a) {
-            if (!validAt(a, b) || (a == u && b == v))
+        bool on[kSide * kSide];
+        for (int b = -kSurroundReach; b <= kSurroundReach; ++b)
+          for (int a = -kSurroundReach; a <= kSurroundReach; ++a)
+            on[(b + kSurroundReach) * kSide + a + kSurroundReach] =
+                (a != 0 || b != 0) && validAt(u + a, v + b) && onSurface(u + a, v + b, u, v);
+        const auto usable = [&](int a, int b) { return on[(b + kSurroundReach) * kSide + a + kSurroundReach]; };
+        for (int b = -kSurroundReach; b <= kSurroundReach; ++b)
+          for (int a = -kSurroundReach; a <= kSurroundReach; ++a) {
+            if (!usable(a, b))
               continue;
-            const float ra = rho[static_cast<std::size_t>(b) * width + a];
-            if (a < u + kSurroundReach && validAt(a + 1, b) && !(a + 1 == u && b == v))
-              steps.push_back(std::fabs(rho[static_cast<std::size_t>(b) * width + a + 1] - ra));
-            if (b < v + kSurroundReach && validAt(a, b + 1) && !(a == u && b + 1 == v))
-              steps.push_back(std::fabs(rho[static_cast<std::size_t>(b + 1) * width + a] - ra));
+            const float ra = rho[static_cast<std::size_t>(v + b) * width + u + a];
+            if (a < kSurroundReach && usable(a + 1, b))
+              steps.push_back(std::fabs(rho[static_cast<std::size_t>(v + b) * width + u + a + 1] - ra));
+            if (b < kSurroundReach && usable(a, b + 1))
+              steps.push_back(std::fabs(rho[static_cast<std::size_t>(v + b + 1) * width + u + a] - ra));
           }
         if (!steps.empty()) {
           std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());

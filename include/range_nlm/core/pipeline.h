@@ -91,7 +91,7 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 /// farther in range than `sigmas` times the profile's sigma at its range from every one of them
 /// and from every straight continuation 2 rho_j - rho_j' of a neighbour j and the pixel j' beyond
 /// it, and farther than 4 times the median range step between adjacent pixels of its 5 x 5
-/// surroundings, gets the median range of those of its valid 8-neighbours that lie on a surface
+/// surroundings that lie on a surface (pass the same test), gets the median range of those of its valid 8-neighbours that lie on a surface
 /// themselves (pass the same test against one of their own neighbours; of two middle ranges, the
 /// one nearer its own; none: it stays). Such points are the mismatches of structured-light block matching and the
 /// mixed ("flying") pixels of time-of-flight cameras at depth edges: no patch resembles theirs,
