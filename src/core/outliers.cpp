@@ -18,6 +18,9 @@ constexpr int kSide = 2 * kSurroundReach + 1;
 /// An outlier must also be farther from every neighbour than this many times the median range
 /// step between adjacent pixels of its 5 x 5 surroundings that lie on a surface.
 constexpr float kSurroundSteps = 4.0f;
+/// Smallest tolerance of "on a surface", in pixel footprints (range x the angle between adjacent
+/// rays).
+constexpr float kFootprints = 3.0f;
 } // namespace
 
 std::size_t
@@ -59,9 +62,38 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   threads = detail::resolveThreads(threads);
   std::vector<float> rho;
   detail::rangesOf(grid, viewpoint, threads, rho);
-  // Most points are within the smallest tolerance of the profile of their first neighbour; the
-  // tolerance at their own range is looked up only for the others.
-  const float smallest = sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end());
+  // The angle between adjacent rays: the median of |p_i - p_j| / rho_i over adjacent valid pixels
+  // of every 4th row (on a surface facing the sensor, the pixel's angular size). A step along the
+  // ray of a few pixel footprints is geometry (an edge of a face seen at a grazing angle, a
+  // curved silhouette), not an outlier, however small the noise: without this floor a noise-free
+  // frame would have its silhouettes taken for outliers.
+  float ray_angle = 0.0f;
+  {
+    std::vector<float> angles;
+    for (int v = 0; v + 1 < height; v += 4)
+      for (int u = 0; u + 1 < width; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * width + u;
+        if (!(rho[i] > 0.0f))
+          continue;
+        for (const std::size_t j : {i + 1, i + static_cast<std::size_t>(width)})
+          if (rho[j] > 0.0f) {
+            const float dx = grid.x[j] - grid.x[i], dy = grid.y[j] - grid.y[i], dz = grid.z[j] - grid.z[i];
+            angles.push_back(std::sqrt(dx * dx + dy * dy + dz * dz) / rho[i]);
+          }
+      }
+    if (!angles.empty()) {
+      std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+      ray_angle = angles[angles.size() / 2];
+    }
+  }
+  const auto toleranceAt = [&](float r) { return std::max(sigmas * profile.sigmaAt(r), kFootprints * ray_angle * r); };
+  // Most points are within the smallest tolerance of their first neighbour; the tolerance at
+  // their own range is looked up only for the others.
+  float nearest = 0.0f;
+  for (float r : rho)
+    nearest = r > 0.0f && (nearest == 0.0f || r < nearest) ? r : nearest;
+  const float smallest = std::max(sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end()),
+                                  kFootprints * ray_angle * nearest);
   const auto validAt = [&](int u, int v) {
     return u >= 0 && v >= 0 && u < width && v < height && grid.valid[static_cast<std::size_t>(v) * width + u];
   };
@@ -71,7 +103,7 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   // (a surface steep to the rays).
   const auto onSurface = [&](int a, int b, int skip_a, int skip_b) {
     const float r = rho[static_cast<std::size_t>(b) * width + a];
-    const float tol = sigmas * profile.sigmaAt(r);
+    const float tol = toleranceAt(r);
     for (int dv = -1; dv <= 1; ++dv)
       for (int du = -1; du <= 1; ++du) {
         const int c = a + du, d = b + dv, e = c + du, f = d + dv;

@@ -174,3 +174,18 @@ TEST(Outliers, AMixedPixelBetweenTwoSurfacesGoesToOneOfThemNotBetween)
   const float r = rangeOf(out_even, mixed);
   EXPECT_TRUE(std::fabs(r - far) < 0.02f) << "moved to " << r << " m, between the surfaces";
 }
+
+TEST(Outliers, ANoiseFreeFrameHasNone)
+{
+  // The boxes scene without noise: its silhouettes, the faces seen at grazing angles and the
+  // sphere's limb step along the rays by far more than its (tiny) noise sigma, but by a few pixel
+  // footprints at most; none of its points is an outlier.
+  SceneOptions o;
+  o.width = 320;
+  o.height = 240;
+  o.fx = o.fy = 525.0 * 320 / 640;
+  o.noise = noiseModelFromString("kinect");
+  o.noise_scale = 0.0;
+  const Grid g = gridOf(renderSequence(o).front().noisy);
+  EXPECT_EQ(detail::findIsolatedPoints(g, profileOf(g), 10.0f, kOrigin, {}, 2).size(), 0u);
+}
