@@ -87,16 +87,17 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
                      const Viewpoint& viewpoint);
 
 /// Moves the isolated outliers of `grid` along their ray onto their neighbours' surface
-/// (FilterParameters::outlier_sigmas): a valid point with at least two valid 8-neighbours that is
-/// farther in range than `sigmas` times the profile's sigma at its range from every one of them
-/// and from every straight continuation 2 rho_j - rho_j' of a neighbour j and the pixel j' beyond
-/// it, and farther than 4 times the median range step between adjacent pixels of its 5 x 5
-/// surroundings that lie on a surface (pass the same test), gets the median range of those of its valid 8-neighbours that lie on a surface
-/// themselves (pass the same test against one of their own neighbours; of two middle ranges, the
-/// one nearer its own; none: it stays). Such points are the mismatches of structured-light block matching and the
-/// mixed ("flying") pixels of time-of-flight cameras at depth edges: no patch resembles theirs,
-/// so the non-local filter leaves them where they are. Returns the number of points moved;
-/// nothing with `sigmas` <= 0 or an empty profile.
+/// (FilterParameters::outlier_sigmas). A point is on a surface if its range is within a tolerance
+/// of a valid 8-neighbour's or of the straight continuation 2 rho_j - rho_j' of a neighbour j and
+/// the pixel j' beyond it; the tolerance is the larger of `sigmas` times the profile's sigma at its
+/// range and 3 pixel footprints (its range times the frame's median angle between adjacent rays).
+/// A point that is not, has at least two valid 8-neighbours and is farther from each of them than
+/// 4 times the median range step between the points of its 5 x 5 surroundings that are on a
+/// surface, gets the median range of its 8-neighbours that are on a surface (of two middle
+/// ranges, the one nearer its own; none: it stays). Such points are the mismatches of
+/// structured-light block matching and the mixed ("flying") pixels of time-of-flight cameras at
+/// depth edges: no patch resembles theirs, so the non-local filter leaves them where they are.
+/// Returns the number of points moved; nothing with `sigmas` <= 0 or an empty profile.
 std::size_t
 correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint);
 
