@@ -63,15 +63,16 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   std::vector<float> rho;
   detail::rangesOf(grid, viewpoint, threads, rho);
   // The angle between adjacent rays: the median of |p_i - p_j| / rho_i over adjacent valid pixels
-  // of every 4th row (on a surface facing the sensor, the pixel's angular size). A step along the
+  // at every 4th column of every 8th row (on a surface facing the sensor, the pixel's angular
+  // size). A step along the
   // ray of a few pixel footprints is geometry (an edge of a face seen at a grazing angle, a
   // curved silhouette), not an outlier, however small the noise: without this floor a noise-free
   // frame would have its silhouettes taken for outliers.
   float ray_angle = 0.0f;
   {
     std::vector<float> angles;
-    for (int v = 0; v + 1 < height; v += 4)
-      for (int u = 0; u + 1 < width; ++u) {
+    for (int v = 0; v + 1 < height; v += 8)
+      for (int u = 0; u + 1 < width; u += 4) {
         const std::size_t i = static_cast<std::size_t>(v) * width + u;
         if (!(rho[i] > 0.0f))
           continue;
@@ -87,13 +88,9 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
     }
   }
   const auto toleranceAt = [&](float r) { return std::max(sigmas * profile.sigmaAt(r), kFootprints * ray_angle * r); };
-  // Most points are within the smallest tolerance of their first neighbour; the tolerance at
-  // their own range is looked up only for the others.
-  float nearest = 0.0f;
-  for (float r : rho)
-    nearest = r > 0.0f && (nearest == 0.0f || r < nearest) ? r : nearest;
-  const float smallest = std::max(sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end()),
-                                  kFootprints * ray_angle * nearest);
+  // Most points are within the smallest tolerance (that of the profile's smallest sigma) of a
+  // neighbour; the tolerance at their own range is looked up only for the others.
+  const float smallest = sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end());
   const auto validAt = [&](int u, int v) {
     return u >= 0 && v >= 0 && u < width && v < height && grid.valid[static_cast<std::size_t>(v) * width + u];
   };
