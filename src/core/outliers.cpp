@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -45,6 +46,8 @@ detail::moveIsolatedPoints(Grid& grid, const std::vector<IsolatedPoint>& points,
     const std::size_t i = q.index;
     const float dx = grid.x[i] - viewpoint[0], dy = grid.y[i] - viewpoint[1], dz = grid.z[i] - viewpoint[2];
     const float f = q.range / std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(f > 0.0f && f < std::numeric_limits<float>::infinity()))
+      continue;
     grid.x[i] = viewpoint[0] + dx * f;
     grid.y[i] = viewpoint[1] + dy * f;
     grid.z[i] = viewpoint[2] + dz * f;
@@ -62,6 +65,10 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   threads = detail::resolveThreads(threads);
   std::vector<float> rho;
   detail::rangesOf(grid, viewpoint, threads, rho);
+  // A range of 0 marks a point the test leaves alone and does not compare with: invalid, at the
+  // viewpoint, or so far that its range overflows.
+  for (float& r : rho)
+    r = r < std::numeric_limits<float>::infinity() ? r : 0.0f;
   // The angle between adjacent rays: the median of |p_i - p_j| / rho_i over adjacent valid pixels
   // at every 4th column of every 8th row (on a surface facing the sensor, the pixel's angular
   // size). A step along the
@@ -79,7 +86,9 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
         for (const std::size_t j : {i + 1, i + static_cast<std::size_t>(width)})
           if (rho[j] > 0.0f) {
             const float dx = grid.x[j] - grid.x[i], dy = grid.y[j] - grid.y[i], dz = grid.z[j] - grid.z[i];
-            angles.push_back(std::sqrt(dx * dx + dy * dy + dz * dz) / rho[i]);
+            const float angle = std::sqrt(dx * dx + dy * dy + dz * dz) / rho[i];
+            if (angle < std::numeric_limits<float>::infinity())
+              angles.push_back(angle);
           }
       }
     if (!angles.empty()) {
@@ -92,7 +101,7 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   // neighbour; the tolerance at their own range is looked up only for the others.
   const float smallest = sigmas * *std::min_element(profile.sigma.begin(), profile.sigma.end());
   const auto validAt = [&](int u, int v) {
-    return u >= 0 && v >= 0 && u < width && v < height && grid.valid[static_cast<std::size_t>(v) * width + u];
+    return u >= 0 && v >= 0 && u < width && v < height && rho[static_cast<std::size_t>(v) * width + u] > 0.0f;
   };
   // Whether point (a, b) lies on a surface with one of its valid 8-neighbours other than pixel
   // (skip_a, skip_b): within `sigmas` noise sigmas at its range of the neighbour's range, or of the
