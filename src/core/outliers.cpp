@@ -196,7 +196,7 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
         int kept = 0;
         for (int dv = -1; dv <= 1; ++dv)
           for (int du = -1; du <= 1; ++du)
-            if ((du != 0 || dv != 0) && validAt(u + du, v + dv) && onSurface(u + du, v + dv, u, v))
+            if (usable(du, dv)) // the ring of the 5 x 5 test: valid and on a surface
               neighbours[kept++] = rho[static_cast<std::size_t>(v + dv) * width + u + du];
         if (kept == 0)
           continue;
