@@ -23,13 +23,17 @@ enum class TemporalWindow
   centred,
   /// t - r .. t: no output delay.
   causal,
-  /// The last r filtered outputs and frame t: no output delay, and the history of the whole
-  /// sequence carried along, like an exponential moving average that is motion- and edge-aware
-  /// (a patch that moved is not similar, so it gets no weight). Memory and time per frame do
-  /// not grow with the sequence. Every frame pushed is filtered (`wanted` of push() is ignored),
-  /// since each output is the next frame's neighbour, except a null frame (not wanted): it comes
-  /// out null and ends the history, so the frame after it is filtered as the first of a sequence
-  /// (how a run over part of a recording starts its history at a chosen frame).
+  /// Frame t and the history of the sequence before it (RunningAverage), one neighbour: per pixel a
+  /// running average, the newest frame weighted 1 / (2r + 1), that starts over from the filtered
+  /// output where the scene or the camera moved. No output delay; like an exponential moving
+  /// average that is motion- and edge-aware (the history restarts where a pixel changed, and a
+  /// patch that moved is not similar, so it gets no weight); memory and time per frame do not
+  /// grow with the sequence. Outputs only start a pixel's history, after that it averages input
+  /// frames, so that the filter's own bias does not pile up over the frames. Every frame pushed
+  /// is filtered (`wanted` of push() is ignored), since each output may start the next frames'
+  /// history, except a null frame (not wanted): it comes out null and ends the history, so the
+  /// frame after it is filtered as the first of a sequence (how a run over part of a recording
+  /// starts its history at a chosen frame).
   recursive
 };
 
@@ -70,8 +74,8 @@ public:
   /// Filters the frames still waiting for future neighbours, with the windows clipped at the end.
   std::vector<CloudPtr> flush();
 
-  /// Frames currently held in memory (input frames and, in recursive mode, past outputs).
-  std::size_t heldFrames() const { return window_.size() + history_.size(); }
+  /// Frames currently held in memory (input frames and, in recursive mode, the history).
+  std::size_t heldFrames() const { return window_.size() + (history_.empty() ? 0 : 1); }
   /// Psi_k of the last frame produced.
   const std::vector<float>& lastFrameWeights() const { return last_weights_; }
   /// Bandwidths of the current frame of the last frame produced.
@@ -100,7 +104,12 @@ private:
   int radius_;
   bool causal_;
   bool recursive_ = false;
-  std::deque<CloudConstPtr> history_; // recursive mode: the last radius_ outputs, oldest first
+  RunningAverage history_; // recursive mode: the running average of the frames so far
+  CloudPtr history_cloud_; // recursive mode: history_ as a neighbour frame
+  Grid history_grid_;      // recursive mode: the frame entering the history
+  Grid start_grid_;        // recursive mode: its filtered output, where a pixel's history starts
+  /// 1 / weight of the newest frame in the history: 2r + 1, the centred window's frame count.
+  int historyLength() const;
   FilterParameters parameters_;
   std::deque<CloudConstPtr> window_; // frames first_ .. first_ + size - 1
   std::deque<bool> wanted_;          // whether each frame of window_ is to be filtered

@@ -152,6 +152,39 @@ struct FrameOffset
 FrameOffset
 analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint);
 
+/// The history of the recursive temporal window (TemporalWindow::recursive): per pixel a running
+/// average of its range over the frames since it last changed. Where a pixel's history starts,
+/// it starts from the frame's filtered output; after that only input frames enter it, so that
+/// the filter's own small bias on curved and steep surfaces does not feed back into every later
+/// frame and pile up (it did when each output was the next frame's neighbour).
+struct RunningAverage
+{
+  /// The average, each point on the ray of the pixel's latest point; NaN where count is 0.
+  Grid average;
+  /// Frames the average stands for per pixel (0: no history).
+  std::vector<std::uint16_t> count;
+  bool empty() const { return average.size() == 0; }
+};
+
+/// Adds `frame` to `history`; `start` is the frame's filtered output (null if there is none).
+/// Every pixel's history starts over where it was empty or of another size, and where
+/// analyseFrameChange(frame, history) finds that the camera moved. Else, per pixel: an invalid
+/// point empties the pixel's history; a pixel without history, or that changed, starts over;
+/// otherwise its range becomes r_h + (r_f - r_h) / min(count + 1, max_count), on the frame
+/// point's ray. A pixel changed if most of the pixels of its 3 x 3 neighbourhood valid in both
+/// differ from the history (less the slowly varying offset along the rays that
+/// analyseFrameChange may have found) by more than 3 frame-to-frame sigmas: the frame's noise
+/// profile at their range times sqrt(1 + 1 / count), raised by the median ratio of the
+/// differences to it where that is above 1 (spatially correlated noise). A pixel starts over
+/// from start's point, counted as max_count - 1 frames (so that the next frames come in with
+/// weight 1 / max_count), or from the frame's point, counted as 1, where start has none. The
+/// profile is estimateNoiseProfile(frame, search_window, samples, seed). By `threads` threads (0 =
+/// OpenMP's default), with the same result. Throws std::invalid_argument if start's size is not
+/// the frame's.
+void
+updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* start, const Viewpoint& viewpoint,
+                     int max_count, int search_window, int samples, std::uint64_t seed, int threads);
+
 /// How much larger the frame-to-frame noise of frame `b` is than its spatial noise profile says:
 /// 1.4826 x the median, over the pixels valid in both frames with a normal, of
 /// |(p_b - p_a) . n_a| / profile_b.sigmaAt(rho_a), divided by sqrt(2) (the difference holds the

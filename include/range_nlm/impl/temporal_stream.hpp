@@ -24,16 +24,39 @@ TemporalStream<PointT>::TemporalStream(int radius, TemporalWindow window, const 
 }
 
 template <typename PointT>
+int
+TemporalStream<PointT>::historyLength() const
+{
+  return 2 * radius_ + 1;
+}
+
+template <typename PointT>
 typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
   last_outputs_.emplace_back();
-  if (!wanted_[t - first_] && !recursive_)
-    return nullptr;
-  if (recursive_ && !window_[t - first_]) { // a gap: the frames after it start a new history
-    history_.clear();
+  const CloudConstPtr& frame = window_[t - first_];
+  if (recursive_ && !frame) { // a gap: the frames after it start a new history
+    history_ = RunningAverage();
+    history_cloud_.reset();
     return nullptr;
   }
+  // Recursive mode: frame t enters the history once it has been filtered with the history so far.
+  auto remember = [this, &frame](const PointCloud* filtered) {
+    if (!recursive_ || radius_ == 0)
+      return;
+    detail::toGrid(*frame, history_grid_, "frame");
+    if (filtered)
+      detail::toGrid(*filtered, start_grid_, "output");
+    const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
+    updateRunningAverage(history_, history_grid_, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(), parameters_.search_window,
+                         parameters_.bandwidth_samples, parameters_.seed, parameters_.threads);
+    if (!history_cloud_)
+      history_cloud_.reset(new PointCloud);
+    detail::fromGrid(*frame, history_.average, *history_cloud_);
+  };
+  if (!wanted_[t - first_] && !recursive_)
+    return nullptr;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -43,9 +66,10 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   std::deque<CloudConstPtr> frames;
   std::size_t current = 0;
   if (recursive_) {
-    frames = history_;
+    if (history_cloud_ && !history_.empty())
+      frames.push_back(history_cloud_);
     current = frames.size();
-    frames.push_back(window_[t - first_]);
+    frames.push_back(frame);
   } else {
     for (std::size_t k = std::max(lo, first_); k <= hi; ++k) {
       if (!window_[k - first_])
@@ -55,14 +79,6 @@ TemporalStream<PointT>::filterAt(std::size_t t)
     }
     current = t - std::max(lo, first_);
   }
-  // In recursive mode each output is a neighbour of the next frames.
-  auto remember = [this](const CloudPtr& out) {
-    if (!recursive_ || radius_ == 0)
-      return;
-    history_.push_back(out);
-    while (history_.size() > static_cast<std::size_t>(radius_))
-      history_.pop_front();
-  };
   filter_.setParameters(parameters_);
   filter_.setFrames(frames, current);
   CloudPtr out(new PointCloud);
@@ -71,12 +87,12 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   } catch (const UnfilterableFrame& e) {
     // Passed through unchanged; a live stream must not stop at one covered or dropped frame.
     filter_.clearFrames();
-    *out = *window_[t - first_];
+    *out = *frame;
     last_weights_.clear();
     last_bandwidths_ = Bandwidths();
     last_outputs_.back().problem = e.what();
     last_outputs_.back().milliseconds = elapsed();
-    remember(out);
+    remember(nullptr);
     return out;
   }
   // The window alone decides which frames stay in memory.
@@ -85,8 +101,8 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   last_bandwidths_ = filter_.getFrameBandwidths()[current];
   last_outputs_.back().bandwidths = last_bandwidths_;
   last_outputs_.back().outliers_moved = filter_.getOutliersMoved();
+  remember(out.get());
   last_outputs_.back().milliseconds = elapsed();
-  remember(out);
   return out;
 }
 
@@ -162,7 +178,8 @@ TemporalStream<PointT>::flush()
   }
   window_.clear();
   wanted_.clear();
-  history_.clear();
+  history_ = RunningAverage();
+  history_cloud_.reset();
   first_ = pushed_;
   return ready;
 }

@@ -1,0 +1,113 @@
+// The history of the recursive temporal window: a motion-aware running average of the input frames.
+#include "internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace range_nlm
+{
+
+namespace
+{
+
+/// Every pixel's history starts over, from `start` (counted as `started` frames) if given.
+void
+restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started)
+{
+  history.average = frame;
+  history.count.resize(frame.size());
+  Grid& h = history.average;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const bool from_start = start && frame.valid[i] && start->valid[i];
+    if (from_start) {
+      h.x[i] = start->x[i];
+      h.y[i] = start->y[i];
+      h.z[i] = start->z[i];
+    }
+    history.count[i] = from_start ? started : frame.valid[i] ? 1 : 0;
+  }
+}
+
+} // namespace
+
+void
+updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* start, const Viewpoint& viewpoint,
+                     int max_count, int search_window, int samples, std::uint64_t seed, int threads)
+{
+  if (start && (start->width != frame.width || start->height != frame.height))
+    throw std::invalid_argument("range_nlm: the filtered frame that starts the history is " +
+                                std::to_string(start->width) + " x " + std::to_string(start->height) +
+                                " but the frame is " + std::to_string(frame.width) + " x " +
+                                std::to_string(frame.height));
+  threads = detail::resolveThreads(threads);
+  max_count = std::max(1, std::min(max_count, static_cast<int>(std::numeric_limits<std::uint16_t>::max())));
+  const std::uint16_t started = static_cast<std::uint16_t>(std::max(1, max_count - 1));
+  if (history.empty() || history.average.width != frame.width || history.average.height != frame.height ||
+      frame.countValid() == 0 || history.average.countValid() == 0) {
+    restart(history, frame, start, started);
+    return;
+  }
+  const FrameOffset change = detail::analyseFrameChange(frame, history.average, viewpoint, threads);
+  if (change.change == FrameChange::motion) {
+    restart(history, frame, start, started);
+    return;
+  }
+  const std::size_t n = frame.size();
+  std::vector<float> rho_f, rho_h;
+  detail::rangesOf(frame, viewpoint, threads, rho_f);
+  detail::rangesOf(history.average, viewpoint, threads, rho_h);
+  const NoiseProfile profile = detail::estimateNoiseProfile(frame, search_window, samples, seed, viewpoint, threads);
+  std::vector<float> sigma(n);
+  detail::interpolateProfile(profile.range, profile.sigma, rho_f.data(), sigma.data(), n);
+  // Differences to the history levelled to the frame (NaN where either has no point), and the
+  // noise sigma of each: the frame's, with the history's share 1 / count of it.
+  const bool offset = change.change == FrameChange::offset && change.range_offset.size() == n;
+  std::vector<float> along(n), scaled(n), ratios(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    const bool both = frame.valid[i] && history.average.valid[i] && history.count[i] > 0 && sigma[i] > 0.0f;
+    const float level = offset ? change.range_offset[i] : 0.0f;
+    const float s = sigma[i] * std::sqrt(1.0f + 1.0f / std::max<float>(1.0f, history.count[i]));
+    along[i] = both ? rho_h[i] - level - rho_f[i] : nan;
+    scaled[i] = s * 0.70710678f; // markChangedPixels takes sqrt(2) sigmas of one frame
+    ratios[i] = both ? std::fabs(along[i]) / s : -1.0f;
+  }
+  std::size_t counted = 0;
+  const float median = detail::medianOfNonNegative(ratios.data(), nullptr, n, threads, &counted);
+  const float ratio = counted >= 64 ? std::max(1.0f, 1.4826f * median) : 1.0f;
+  std::vector<unsigned char> changed;
+  detail::markChangedPixels(along, frame.width, frame.height, scaled.data(), scaled.data(), ratio, threads, changed);
+  Grid& h = history.average;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    if (!frame.valid[i]) {
+      h.x[i] = h.y[i] = h.z[i] = nan;
+      h.valid[i] = 0;
+      history.count[i] = 0;
+      continue;
+    }
+    if (!h.valid[i] || history.count[i] == 0 || changed[i] || !(rho_f[i] > 0.0f)) {
+      const Grid& from = start && start->valid[i] ? *start : frame;
+      h.x[i] = from.x[i];
+      h.y[i] = from.y[i];
+      h.z[i] = from.z[i];
+      h.valid[i] = 1;
+      history.count[i] = start && start->valid[i] ? started : 1;
+      continue;
+    }
+    const int count = std::min(static_cast<int>(history.count[i]) + 1, max_count);
+    const float r = rho_h[i] + (rho_f[i] - rho_h[i]) / static_cast<float>(count);
+    const float t = r / rho_f[i];
+    h.x[i] = viewpoint[0] + (frame.x[i] - viewpoint[0]) * t;
+    h.y[i] = viewpoint[1] + (frame.y[i] - viewpoint[1]) * t;
+    h.z[i] = viewpoint[2] + (frame.z[i] - viewpoint[2]) * t;
+    history.count[i] = static_cast<std::uint16_t>(count);
+  }
+}
+
+} // namespace range_nlm
