@@ -12,6 +12,12 @@ namespace range_nlm
 
 namespace
 {
+/// Frame-to-frame sigmas beyond which a pixel's history starts over. Lower than the filter's own
+/// test of change (detail::kChangeSigmas, 3): a history that starts over needlessly starts from the
+/// filtered frame, which costs little, but one that averages a surface that moved keeps it where
+/// it was (a box moving across the view 10 mm per frame under time-of-flight noise: flat RMSE
+/// 0.409 mm at 2 sigmas, 0.522 at 3, 0.466 for the frames filtered alone).
+constexpr float kHistoryChangeSigmas = 2.0f;
 
 /// Every pixel's history starts over, from `start` (counted as `started` frames) if given.
 void
@@ -74,7 +80,8 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
     const float level = offset ? change.range_offset[i] : 0.0f;
     const float s = sigma[i] * std::sqrt(1.0f + 1.0f / std::max<float>(1.0f, history.count[i]));
     along[i] = both ? rho_h[i] - level - rho_f[i] : nan;
-    scaled[i] = s * 0.70710678f; // markChangedPixels takes sqrt(2) sigmas of one frame
+    // markChangedPixels compares with kChangeSigmas x sqrt(2) x ratio x this.
+    scaled[i] = s * (kHistoryChangeSigmas / (detail::kChangeSigmas * 1.41421356f));
     ratios[i] = both ? std::fabs(along[i]) / s : -1.0f;
   }
   std::size_t counted = 0;

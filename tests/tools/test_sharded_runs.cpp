@@ -432,7 +432,7 @@ TEST_F(ShardedRuns, ShardsShareTheOutputDirectoryButNotTheirFrames)
 
 TEST_F(ShardedRuns, RecursiveShardsStayCloseToOneRunAndReplayingTheWholeHistoryIsExact)
 {
-  // Recursive mode carries every earlier output along, so a shard that starts its history
+  // Recursive mode carries the history of every earlier frame along, so a shard that starts its history
   // --shard-warmup frames early differs slightly from one run; 'all' replays from frame 0.
   const std::string schedule = "--temporal-radius 1 --recursive";
   const fs::path one = single(schedule);
@@ -440,10 +440,10 @@ TEST_F(ShardedRuns, RecursiveShardsStayCloseToOneRunAndReplayingTheWholeHistoryI
   expectSameOutputs(exact, one, "recursive, warm-up 'all'");
   const double cold = maxDepthDifference(sharded(schedule + " --shard-warmup 0", 4, "recursive_cold"), one);
   const double warm = maxDepthDifference(sharded(schedule, 4, "recursive_default"), one); // 8 frames
-  // The tolerance docs/cluster.md states for the default warm-up of 8 x the radius: 1 mm here,
+  // The tolerance docs/cluster.md states for the default warm-up of 8 x the radius: 3 mm here,
   // on a scene at 1 - 1.25 m with 5 mm of noise; shards without warm-up exceed it.
-  EXPECT_LE(warm, 0.001) << "max |dz| with the default warm-up";
-  EXPECT_GT(cold, 0.001) << "max |dz| without warm-up";
+  EXPECT_LE(warm, 0.003) << "max |dz| with the default warm-up";
+  EXPECT_GT(cold, 0.003) << "max |dz| without warm-up";
   std::cout << "recursive shards, max |dz| from one run: " << cold << " m without warm-up, " << warm
             << " m with the default warm-up\n";
   EXPECT_GT(cold, warm) << "without warm-up a shard starts its history cold and differs more";

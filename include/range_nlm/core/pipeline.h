@@ -173,7 +173,7 @@ struct RunningAverage
 /// otherwise its range becomes r_h + (r_f - r_h) / min(count + 1, max_count), on the frame
 /// point's ray. A pixel changed if most of the pixels of its 3 x 3 neighbourhood valid in both
 /// differ from the history (less the slowly varying offset along the rays that
-/// analyseFrameChange may have found) by more than 3 frame-to-frame sigmas: the frame's noise
+/// analyseFrameChange may have found) by more than 2 frame-to-frame sigmas: the frame's noise
 /// profile at their range times sqrt(1 + 1 / count), raised by the median ratio of the
 /// differences to it where that is above 1 (spatially correlated noise). A pixel starts over
 /// from start's point, counted as max_count - 1 frames (so that the next frames come in with
