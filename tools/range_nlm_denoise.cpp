@@ -78,7 +78,7 @@ struct Pass
   FilterParameters parameters;
   int radius = 0;
   bool causal = false;
-  /// Neighbours are the last `radius` filtered outputs (TemporalWindow::recursive).
+  /// The neighbour is the history of the frames before (TemporalWindow::recursive).
   bool recursive = false;
 
   TemporalWindow window() const
@@ -527,8 +527,9 @@ addOptions(po::options_description& options)
     ("output-dir", po::value<std::string>(), "directory for the filtered frames (same file names)")
     ("temporal-radius", po::value<int>()->default_value(0), "R: frames on each side used by the temporal filter (0 = static)")
     ("causal", "temporal window uses only past frames (no output delay)")
-    ("recursive", "temporal neighbours are the last R filtered outputs: no output delay, the whole history carried "
-                  "along at the cost of R frames (implies --causal)")
+    ("recursive", "the temporal neighbour is the history, a running average of the frames (newest weighted "
+                  "1 / (2R + 1)): no output delay, the whole history carried along at the cost of one frame "
+                  "(implies --causal)")
     ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
     ("input-bag", po::value<std::string>(), "rosbag whose --topic PointCloud2 messages are filtered (other topics copied)")
     ("output-bag", po::value<std::string>(), "rosbag written with the filtered messages (same topics and record times)")
