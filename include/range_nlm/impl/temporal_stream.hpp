@@ -49,8 +49,9 @@ TemporalStream<PointT>::filterAt(std::size_t t)
     if (filtered)
       detail::toGrid(*filtered, start_grid_, "output");
     const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
-    updateRunningAverage(history_, history_grid_, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(), parameters_.search_window,
-                         parameters_.bandwidth_samples, parameters_.seed, parameters_.threads);
+    updateRunningAverage(history_, history_grid_, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(),
+                         parameters_.search_window, parameters_.bandwidth_samples, parameters_.seed,
+                         parameters_.threads);
     if (!history_cloud_)
       history_cloud_.reset(new PointCloud);
     detail::fromGrid(*frame, history_.average, *history_cloud_);
