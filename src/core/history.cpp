@@ -65,7 +65,14 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   std::vector<float> rho_f, rho_h;
   detail::rangesOf(frame, viewpoint, threads, rho_f);
   detail::rangesOf(history.average, viewpoint, threads, rho_h);
-  const NoiseProfile profile = detail::estimateNoiseProfile(frame, search_window, samples, seed, viewpoint, threads);
+  NoiseProfile profile;
+  try {
+    profile = detail::estimateNoiseProfile(frame, search_window, samples, seed, viewpoint, threads);
+  } catch (const UnfilterableFrame&) {
+    // Too few points to tell noise from change (a nearly covered lens): start over from the frame.
+    restart(history, frame, start, started);
+    return;
+  }
   std::vector<float> sigma(n);
   detail::interpolateProfile(profile.range, profile.sigma, rho_f.data(), sigma.data(), n);
   // Differences to the history levelled to the frame (NaN where either has no point), and the

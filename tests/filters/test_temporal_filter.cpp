@@ -286,6 +286,34 @@ TEST(TemporalFilter, StreamPassesAnAllNanFrameThroughAndGoesOn)
   EXPECT_THROW(f.filter(unused), UnfilterableFrame);
 }
 
+TEST(TemporalFilter, RecursiveStreamPassesASparseFrameThroughAndGoesOn)
+{
+  // A frame with a few scattered points (a nearly covered lens) has no window to estimate its
+  // noise from: it comes out unchanged with the reason, the history starts over from it, and the
+  // stream goes on. Every window of 9 x 9 pixels holds at most one of its points.
+  const FilterParameters p = FilterParameters::recommended();
+  std::vector<Cloud::ConstPtr> frames = sequence(5, 0, 0.003, 90);
+  Cloud::Ptr sparse(new Cloud(*frames[2]));
+  for (std::size_t i = 0; i < sparse->size(); ++i)
+    if ((i % sparse->width) % 10 != 0 || (i / sparse->width) % 10 != 0)
+      (*sparse)[i].x = (*sparse)[i].y = (*sparse)[i].z = std::numeric_limits<float>::quiet_NaN();
+  sparse->is_dense = false;
+  frames[2] = sparse;
+  TemporalStream<pcl::PointXYZ> stream(1, TemporalWindow::recursive, p);
+  for (std::size_t t = 0; t < frames.size(); ++t) {
+    std::vector<Cloud::Ptr> out;
+    ASSERT_NO_THROW(out = stream.push(frames[t])) << "frame " << t;
+    ASSERT_EQ(out.size(), 1u);
+    const std::string problem = stream.lastOutputs().front().problem;
+    if (t == 2) {
+      EXPECT_FALSE(problem.empty());
+      EXPECT_EQ(maxDistance(*out[0], *sparse), 0.0) << "passed through unchanged";
+    } else {
+      EXPECT_TRUE(problem.empty()) << t << ": " << problem;
+    }
+  }
+}
+
 namespace
 {
 /// A static sequence of the generated boxes scene with a noise model, `frames` frames.

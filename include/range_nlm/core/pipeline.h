@@ -168,7 +168,8 @@ struct RunningAverage
 
 /// Adds `frame` to `history`; `start` is the frame's filtered output (null if there is none).
 /// Every pixel's history starts over where it was empty or of another size, and where
-/// analyseFrameChange(frame, history) finds that the camera moved. Else, per pixel: an invalid
+/// analyseFrameChange(frame, history) finds that the camera moved, or the frame has too few points
+/// for a noise estimate (estimateNoiseProfile throws UnfilterableFrame). Else, per pixel: an invalid
 /// point empties the pixel's history; a pixel without history, or that changed, starts over;
 /// otherwise its range becomes r_h + (r_f - r_h) / min(count + 1, max_count), on the frame
 /// point's ray. A pixel changed if most of the pixels of its 3 x 3 neighbourhood valid in both
