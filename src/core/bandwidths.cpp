@@ -670,9 +670,14 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
   return detail::estimateTemporalNoiseRatio(a, normals_a, b, profile_b, viewpoint, 1);
 }
 
+namespace
+{
+/// changed[i] = 1 where most of the pixels of the 3 x 3 neighbourhood of i with a finite along[j]
+/// have beyond(j, along[j]) (see markChangedPixels).
+template <typename Beyond>
 void
-detail::markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
-                          const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
+markMostlyBeyond(const std::vector<float>& along, int width, int height, Beyond beyond, int threads,
+                 std::vector<unsigned char>& changed)
 {
   const std::size_t n = along.size();
   changed.assign(n, 0);
@@ -683,14 +688,13 @@ detail::markChangedPixels(const std::vector<float>& along, int width, int height
   // threshold in the high one; their sums over 3 x 3 pixels (at most 9 each, so the nibbles do
   // not carry), along the rows into `rows`, then along the columns.
   std::vector<unsigned char> code(n), rows(n);
-  const float scale = kChangeSigmas * 1.41421356f * ratio;
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i) {
     const float d = along[i];
     const unsigned char known = !std::isnan(d);
-    const unsigned char beyond = std::fabs(d) > scale * std::max(sigma_a[i], sigma_b[i]); // false for NaN
-    code[i] = static_cast<unsigned char>(known | (beyond << 4));
+    const unsigned char out = beyond(i, d); // false for NaN
+    code[i] = static_cast<unsigned char>(known | (out << 4));
   }
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int v = 0; v < height; ++v) {
@@ -718,6 +722,27 @@ detail::markChangedPixels(const std::vector<float>& along, int width, int height
       out[u] = k > 0 && 2 * y > k;
     }
   }
+}
+} // namespace
+
+void
+detail::markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
+                          const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed)
+{
+  const float scale = kChangeSigmas * 1.41421356f * ratio;
+  markMostlyBeyond(
+      along, width, height,
+      [=](std::ptrdiff_t i, float d) { return std::fabs(d) > scale * std::max(sigma_a[i], sigma_b[i]); }, threads,
+      changed);
+}
+
+void
+detail::markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma, float sigmas,
+                          int threads, std::vector<unsigned char>& changed)
+{
+  markMostlyBeyond(
+      along, width, height, [=](std::ptrdiff_t i, float d) { return std::fabs(d) > sigmas * sigma[i]; }, threads,
+      changed);
 }
 
 float

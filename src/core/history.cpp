@@ -19,22 +19,29 @@ namespace
 /// 0.409 mm at 2 sigmas, 0.522 at 3, 0.466 for the frames filtered alone).
 constexpr float kHistoryChangeSigmas = 2.0f;
 
-/// Every pixel's history starts over, from `start` (counted as `started` frames) if given.
+/// Pixel i's history starts over from start's point (counted as `started` frames) where start has
+/// one, else from the frame's (counted as 1); it is empty where the frame has no point.
+void
+startOver(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started, std::size_t i)
+{
+  Grid& h = history.average;
+  const bool from_start = start && frame.valid[i] && start->valid[i];
+  const Grid& from = from_start ? *start : frame;
+  h.x[i] = from.x[i];
+  h.y[i] = from.y[i];
+  h.z[i] = from.z[i];
+  h.valid[i] = frame.valid[i];
+  history.count[i] = from_start ? started : frame.valid[i] ? 1 : 0;
+}
+
+/// Every pixel's history starts over.
 void
 restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started)
 {
   history.average = frame;
   history.count.resize(frame.size());
-  Grid& h = history.average;
-  for (std::size_t i = 0; i < frame.size(); ++i) {
-    const bool from_start = start && frame.valid[i] && start->valid[i];
-    if (from_start) {
-      h.x[i] = start->x[i];
-      h.y[i] = start->y[i];
-      h.z[i] = start->z[i];
-    }
-    history.count[i] = from_start ? started : frame.valid[i] ? 1 : 0;
-  }
+  for (std::size_t i = 0; i < frame.size(); ++i)
+    startOver(history, frame, start, started, i);
 }
 
 } // namespace
@@ -78,40 +85,28 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   // Differences to the history levelled to the frame (NaN where either has no point), and the
   // noise sigma of each: the frame's, with the history's share 1 / count of it.
   const bool offset = change.change == FrameChange::offset && change.range_offset.size() == n;
-  std::vector<float> along(n), scaled(n), ratios(n);
+  std::vector<float> along(n), noise(n), ratios(n);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i) {
     const bool both = frame.valid[i] && history.average.valid[i] && history.count[i] > 0 && sigma[i] > 0.0f;
     const float level = offset ? change.range_offset[i] : 0.0f;
-    const float s = sigma[i] * std::sqrt(1.0f + 1.0f / std::max<float>(1.0f, history.count[i]));
+    noise[i] = sigma[i] * std::sqrt(1.0f + 1.0f / std::max<float>(1.0f, history.count[i]));
     along[i] = both ? rho_h[i] - level - rho_f[i] : nan;
-    // markChangedPixels compares with kChangeSigmas x sqrt(2) x ratio x this.
-    scaled[i] = s * (kHistoryChangeSigmas / (detail::kChangeSigmas * 1.41421356f));
-    ratios[i] = both ? std::fabs(along[i]) / s : -1.0f;
+    ratios[i] = both ? std::fabs(along[i]) / noise[i] : -1.0f;
   }
   std::size_t counted = 0;
   const float median = detail::medianOfNonNegative(ratios.data(), nullptr, n, threads, &counted);
   const float ratio = counted >= 64 ? std::max(1.0f, 1.4826f * median) : 1.0f;
   std::vector<unsigned char> changed;
-  detail::markChangedPixels(along, frame.width, frame.height, scaled.data(), scaled.data(), ratio, threads, changed);
+  detail::markChangedPixels(along, frame.width, frame.height, noise.data(), kHistoryChangeSigmas * ratio, threads,
+                            changed);
   Grid& h = history.average;
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i) {
-    if (!frame.valid[i]) {
-      h.x[i] = h.y[i] = h.z[i] = nan;
-      h.valid[i] = 0;
-      history.count[i] = 0;
-      continue;
-    }
-    if (!h.valid[i] || history.count[i] == 0 || changed[i] || !(rho_f[i] > 0.0f)) {
-      const Grid& from = start && start->valid[i] ? *start : frame;
-      h.x[i] = from.x[i];
-      h.y[i] = from.y[i];
-      h.z[i] = from.z[i];
-      h.valid[i] = 1;
-      history.count[i] = start && start->valid[i] ? started : 1;
+    if (!frame.valid[i] || !h.valid[i] || history.count[i] == 0 || changed[i] || !(rho_f[i] > 0.0f)) {
+      startOver(history, frame, start, started, static_cast<std::size_t>(i));
       continue;
     }
     const int count = std::min(static_cast<int>(history.count[i]) + 1, max_count);

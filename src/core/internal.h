@@ -109,6 +109,10 @@ constexpr float kChangeSigmas = 3.0f;
 void
 markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
                   const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed);
+/// The same vote with the threshold sigmas x sigma[i] (sigma the noise of the difference itself).
+void
+markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma, float sigmas,
+                  int threads, std::vector<unsigned char>& changed);
 /// analyseFrameChange by `threads` threads, with the same result.
 FrameOffset
 analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads);
