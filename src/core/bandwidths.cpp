@@ -737,6 +737,42 @@ detail::markChangedPixels(const std::vector<float>& along, int width, int height
 }
 
 void
+detail::widenMask(const std::vector<unsigned char>& mask, int width, int height, int radius, int threads,
+                  std::vector<unsigned char>& out)
+{
+  const std::size_t n = mask.size();
+  if (radius <= 0 || width <= 0 || height <= 0 || n != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
+    out = mask;
+    return;
+  }
+  threads = detail::resolveThreads(threads);
+  // Separable: the maximum over each row's span, then over each column's.
+  std::vector<unsigned char> rows(n);
+  out.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    const unsigned char* __restrict in = &mask[static_cast<std::size_t>(v) * width];
+    unsigned char* __restrict to = &rows[static_cast<std::size_t>(v) * width];
+    for (int u = 0; u < width; ++u) {
+      unsigned char any = 0;
+      for (int x = std::max(0, u - radius); x <= std::min(width - 1, u + radius); ++x)
+        any |= in[x];
+      to[u] = any ? 1 : 0;
+    }
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int v = 0; v < height; ++v) {
+    unsigned char* __restrict to = &out[static_cast<std::size_t>(v) * width];
+    for (int u = 0; u < width; ++u) {
+      unsigned char any = 0;
+      for (int y = std::max(0, v - radius); y <= std::min(height - 1, v + radius); ++y)
+        any |= rows[static_cast<std::size_t>(y) * width + u];
+      to[u] = any;
+    }
+  }
+}
+
+void
 detail::markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma, float sigmas,
                           int threads, std::vector<unsigned char>& changed)
 {

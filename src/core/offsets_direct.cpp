@@ -35,6 +35,7 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
       double num = 0.0, den = 0.0;
       for (const FrameTerm& term : frames) {
         const Grid& g = *term.grid;
+        const Grid& c = term.patches ? *term.patches : center; // the centre patch's grid
         const float inv_d2 = term.inverse_distance2 ? (*term.inverse_distance2)[i]
                                                     : inverseSquareInline(term.distance_bandwidth);
         const float inv_s2 = term.inverse_similarity2 ? (*term.inverse_similarity2)[i]
@@ -55,11 +56,10 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
                     bu < 0 || bu >= width)
                   continue;
                 const int a = av * width + au, b = bv * width + bu;
-                if (!center.valid[a] || !g.valid[b])
+                if (!c.valid[a] || !g.valid[b])
                   continue;
-                const double t = (double(center.x[a]) - g.x[b]) * nx +
-                                 (double(center.y[a]) - g.y[b]) * ny +
-                                 (double(center.z[a]) - g.z[b]) * nz;
+                const double t = (double(c.x[a]) - g.x[b]) * nx + (double(c.y[a]) - g.y[b]) * ny +
+                                 (double(c.z[a]) - g.z[b]) * nz;
                 sim_sum += t * t;
                 ++pairs;
               }

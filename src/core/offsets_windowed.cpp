@@ -134,11 +134,14 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
   // vector: lane_width, then the search window plus the patch; 8 more keep every read inside.
   const std::ptrdiff_t stride = reach + lane_width + search_window + patch_size + 8;
 
-  // The centre frame, then every other frame, 3 planes each, in one buffer.
+  // The centre frame, then every other frame and patch guide, 3 planes each, in one buffer.
   const std::size_t plane_size = NanPaddedFrame::planeSize(center, reach, stride);
-  std::size_t padded_count = 1;
+  std::vector<const Grid*> grids{&center};
   for (const FrameTerm& term : frames)
-    padded_count += term.grid != &center ? 1 : 0;
+    for (const Grid* grid : {term.grid, term.patches})
+      if (grid && std::find(grids.begin(), grids.end(), grid) == grids.end())
+        grids.push_back(grid);
+  const std::size_t padded_count = grids.size();
   std::unique_ptr<float[]> own;
   float* next = nullptr;
   if (storage) {
@@ -149,18 +152,29 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
     next = own.get();
   }
   const NanPaddedFrame padded_center(center, reach, stride, threads, next);
-  std::vector<std::unique_ptr<NanPaddedFrame>> padded(frames.size());
+  // Each grid is padded once, however many terms name it.
+  std::vector<std::pair<const Grid*, std::unique_ptr<NanPaddedFrame>>> padded;
+  const auto paddedPlane = [&](const Grid* grid) {
+    if (grid == &center)
+      return padded_center.plane();
+    for (const auto& known : padded)
+      if (known.first == grid)
+        return known.second->plane();
+    next += 3 * plane_size;
+    padded.emplace_back(grid, std::make_unique<NanPaddedFrame>(*grid, reach, stride, threads, next));
+    return padded.back().second->plane();
+  };
   std::vector<WindowPlane> planes(frames.size());
   for (std::size_t f = 0; f < frames.size(); ++f) {
     const FrameTerm& term = frames[f];
-    const NanPaddedFrame* p = &padded_center;
-    if (term.grid != &center) {
-      next += 3 * plane_size;
-      padded[f] = std::make_unique<NanPaddedFrame>(*term.grid, reach, stride, threads, next);
-      p = padded[f].get();
-    }
     WindowPlane& w = planes[f];
-    w = p->plane();
+    w = paddedPlane(term.grid);
+    if (term.patches && term.patches != &center) {
+      const WindowPlane guide = paddedPlane(term.patches);
+      w.patch_x = guide.x;
+      w.patch_y = guide.y;
+      w.patch_z = guide.z;
+    }
     w.psi = term.weight;
     w.d2 = inverseSquare(term.distance_bandwidth);
     w.s2 = inverseSquare(term.similarity_bandwidth);

@@ -126,8 +126,9 @@ detail::computeOffsets(const Grid& center, const NormalField& normals, const std
                        std::vector<float>* planes)
 {
   for (const FrameTerm& term : frames)
-    if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height)
-      throw std::invalid_argument("range_nlm: every frame must have the size of the filtered frame");
+    if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height ||
+        (term.patches && (term.patches->width != center.width || term.patches->height != center.height)))
+      throw std::invalid_argument("range_nlm: every frame (and patch guide) must have the size of the filtered frame");
   if (!active.empty() && active.size() != center.size())
     throw std::invalid_argument("range_nlm: the active mask must have one entry per point");
   // Both evaluations write every element.
@@ -760,6 +761,12 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         s_max = std::max(s_max, bandwidths[k].similarity);
     std::vector<FrameTerm> terms;
     std::vector<float> weights(count, 0.0f);
+    // Guarded: the patch guide the other frames' patches are compared with (docs/method.md, "The
+    // patch guide"), the sums of the unchanged frames' points and their weights per pixel,
+    // started with the current frame (weight 1).
+    Grid& guide = workspace.guide;
+    std::vector<float>& guide_weight = workspace.guide_weight;
+    bool guided = false;
     for (int k = 0; k < count; ++k) {
       if (!usable[k])
         continue;
@@ -790,11 +797,14 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         // (analyseFrameChange, before the levelling) where there is one, else the motion test.
         const std::vector<signed char>& known_moved = workspace.frames_moved;
         const int analysed = guarded && known_moved.size() == static_cast<std::size_t>(count) ? known_moved[k] : -1;
-        const float ratio = compared && analysed != 1
-                                ? std::max(1.0f, detail::compareAlong(along, current.width, current.height,
-                                                                      sig.data(), guarded && analysed < 0, threads)
-                                                     .ratio)
-                                : 1.0f;
+        bool moved = analysed == 1;
+        float ratio = 1.0f;
+        if (compared && analysed != 1) {
+          const detail::FrameComparison comparison =
+              detail::compareAlong(along, current.width, current.height, sig.data(), guarded && analysed < 0, threads);
+          moved = comparison.moved;
+          ratio = std::max(1.0f, comparison.ratio);
+        }
         const bool cross = ratio > 1.0f;
         if (own_d) {
           profileMap(profiles[k].range, profiles[k].extent, rho, ext);
@@ -821,6 +831,29 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 #pragma omp parallel for simd schedule(static) num_threads(threads)
             for (std::ptrdiff_t i = 0; i < size; ++i)
               out[i] = changed[i] ? none : out[i];
+            // A frame that did not move enters the guide with its points where neither they nor
+            // their surroundings within kGuideMargin pixels changed, weighted by the inverse of
+            // the frame's noise variance relative to the current frame's, (s_c / s_k)^2.
+            const float s_k = bandwidths[k].similarity, s_c = bandwidths[center].similarity;
+            if (!moved && s_k > 0.0f && s_c > 0.0f && std::isfinite(s_k) && std::isfinite(s_c)) {
+              if (!guided) {
+                detail::copyGrid(current, guide, threads);
+                guide_weight.assign(n, 1.0f);
+                guided = true;
+              }
+              std::vector<unsigned char>& widened = workspace.widened;
+              detail::widenMask(changed, current.width, current.height, detail::kGuideMargin, threads, widened);
+              const float w = (s_c / s_k) * (s_c / s_k);
+              const Grid& other = *frames[k];
+#pragma omp parallel for schedule(static) num_threads(threads)
+              for (std::ptrdiff_t i = 0; i < size; ++i)
+                if (guide.valid[i] && other.valid[i] && !widened[i]) {
+                  guide.x[i] += w * other.x[i];
+                  guide.y[i] += w * other.y[i];
+                  guide.z[i] += w * other.z[i];
+                  guide_weight[i] += w;
+                }
+            }
           }
           term.inverse_distance2 = &inverse_d2[k];
         }
@@ -837,6 +870,19 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         }
       }
       terms.push_back(term);
+    }
+    if (guided) {
+      const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::ptrdiff_t i = 0; i < size; ++i) {
+        const float inverse = 1.0f / guide_weight[i];
+        guide.x[i] *= inverse;
+        guide.y[i] *= inverse;
+        guide.z[i] *= inverse;
+      }
+      for (FrameTerm& term : terms)
+        if (term.grid != &current)
+          term.patches = &guide;
     }
     if (iteration == 0) {
       run.bandwidths = bandwidths;

@@ -568,6 +568,35 @@ TEST(FrameChange, PerPixelTestMarksWhatMovedBeyondTheNoiseAndNotTheNoise)
   }
 }
 
+// The patch guide's margin: widenMask sets every pixel within the radius (Chebyshev) of a set
+// pixel and no other, clipped at the frame's border, for any thread count; radius 0 copies.
+TEST(FrameChange, WidenedMaskIsTheSetPixelsSquareNeighbourhood)
+{
+  const int w = 29, h = 17;
+  std::vector<unsigned char> mask(w * h, 0);
+  mask[5 * w + 7] = 1;   // inside
+  mask[0 * w + 28] = 1;  // a corner
+  mask[16 * w + 1] = 1;  // near another corner
+  std::vector<unsigned char> out;
+  detail::widenMask(mask, w, h, 2, 1, out);
+  ASSERT_EQ(out.size(), mask.size());
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      bool expected = false;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          expected |= mask[y * w + x] && std::abs(x - u) <= 2 && std::abs(y - v) <= 2;
+      EXPECT_EQ(out[v * w + u], expected ? 1 : 0) << u << ", " << v;
+    }
+  for (int threads : {2, 3}) {
+    std::vector<unsigned char> again;
+    detail::widenMask(mask, w, h, 2, threads, again);
+    EXPECT_EQ(again, out) << threads;
+  }
+  detail::widenMask(mask, w, h, 0, 1, out);
+  EXPECT_EQ(out, mask);
+}
+
 // The histogram median (the ranges' median of every run, the frame-to-frame noise ratio) is the
 // value std::nth_element puts at rank count / 2, skipping negative, NaN and masked values; with
 // ties (a quantized depth unit), values sharing one histogram bin and the count, for any thread

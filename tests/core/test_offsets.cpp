@@ -138,6 +138,53 @@ TEST(Kernel, EveryInstructionSetBuildMatchesDirect)
     }
 }
 
+// A patch guide (FrameTerm::patches): the other frames' patches are compared with the guide's
+// patch around i instead of the centre frame's, in every instruction-set build as in the direct
+// evaluation, with holes where the guide and the frames differ, with guided and unguided terms
+// interleaved (the kernel projects the centre patch again when its source changes); the centre
+// frame named as its own guide changes nothing; a guide of another size is rejected.
+TEST(Kernel, PatchGuideIsHonouredByEveryBuildAsByTheDirectEvaluation)
+{
+  const Viewpoint origin{0, 0, 0};
+  const std::vector<const detail::RowKernels*> builds = detail::supportedRowKernels();
+  ASSERT_GE(builds.size(), 1u);
+  for (int holes = 0; holes < 2; ++holes) {
+    const double p = holes ? 0.1 : 0.0;
+    const Grid a = randomSurface(37, 23, p, 60), b = randomSurface(37, 23, p, 61), c = randomSurface(37, 23, p, 62);
+    const Grid guide = randomSurface(37, 23, p, 63);
+    const NormalField normals = estimateNormals(b, 3, origin, 1);
+    FrameTerm ta{&a, 0.03f, 0.005f, 0.4f}, tc{&c, 0.025f, 0.006f, 0.2f};
+    const FrameTerm tb{&b, 0.02f, 0.004f, 1.0f};
+    const std::vector<FrameTerm> plain{ta, tb, tc};
+    ta.patches = tc.patches = &guide;
+    const std::vector<FrameTerm> guided{ta, tb, tc};
+    for (int patch : {3, 5, 7, 9}) {
+      std::vector<float> direct, unguided;
+      computeOffsets(b, normals, guided, 7, patch, Evaluation::direct, 2, {}, direct);
+      computeOffsets(b, normals, plain, 7, patch, Evaluation::direct, 2, {}, unguided);
+      EXPECT_GT(maxDifference(direct, unguided), 1e-4) << "the guide must change the similarities";
+      for (std::size_t k = 0; k < builds.size(); ++k) {
+        std::vector<float> fast(b.size(), -1.0f);
+        detail::computeOffsetsWindowed(*builds[k], b, normals, guided, 7, patch, 2, {}, fast);
+        EXPECT_LT(maxDifference(fast, direct), 2e-6) << "build " << k << " holes " << holes << " patch " << patch;
+      }
+    }
+    std::vector<FrameTerm> self = plain;
+    for (FrameTerm& t : self)
+      t.patches = &b;
+    std::vector<float> with_self, without;
+    computeOffsets(b, normals, self, 7, 5, Evaluation::fast, 2, {}, with_self);
+    computeOffsets(b, normals, plain, 7, 5, Evaluation::fast, 2, {}, without);
+    EXPECT_EQ(with_self, without);
+  }
+  const Grid b = randomSurface(20, 10, 0.0, 70), small = randomSurface(19, 10, 0.0, 71);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  FrameTerm t{&b, 0.02f, 0.004f, 1.0f};
+  t.patches = &small;
+  std::vector<float> out;
+  EXPECT_THROW(computeOffsets(b, normals, {t}, 5, 3, Evaluation::fast, 1, {}, out), std::invalid_argument);
+}
+
 TEST(Kernel, FastKeepsPrecisionWherePatchesStraddleADepthEdge)
 {
   // A 0.5 m step with 0.2 mm noise: patches that straddle the step at the same place have a

@@ -238,7 +238,10 @@ automaticDilation(const Grid& frame);
 /// One frame of the (temporal) neighbourhood: its points, bandwidths and frame weight
 /// Psi_k = Psi_dk * Psi_sk. The static filter is the case of one frame with weight 1.
 /// Per-point bandwidths (range_adaptive) are given as maps of 1 / d^2 and 1 / s^2 indexed by
-/// the centre point i; when set they replace the scalar bandwidths.
+/// the centre point i; when set they replace the scalar bandwidths. `patches`, when set, is the
+/// grid the centre patch is taken from when this frame's patches are compared with it (a patch
+/// guide: Sim(i, j) = mean over o of |(g_{i+o} - p_{j+o}) . n_i|^2 with g = *patches); it must
+/// have the size of the centre frame. Null: the centre frame itself, as in the paper.
 struct FrameTerm
 {
   const Grid* grid = nullptr;
@@ -247,6 +250,7 @@ struct FrameTerm
   float weight = 1.0f;
   const std::vector<float>* inverse_distance2 = nullptr;
   const std::vector<float>* inverse_similarity2 = nullptr;
+  const Grid* patches = nullptr;
 };
 
 /// Computes for every point i of `center` the filtered normal offset
@@ -360,6 +364,11 @@ struct Workspace
   std::vector<float> along;
   std::vector<unsigned char> changed;
   std::vector<std::vector<float>> inverse_d2, inverse_s2;
+  /// Guarded: the patch guide (FrameTerm::patches), its per-pixel weights, and a neighbour's
+  /// changed pixels widened by the guide's margin.
+  Grid guide;
+  std::vector<float> guide_weight;
+  std::vector<unsigned char> widened;
   /// The pre-smoothed copy the normals are fitted on.
   Grid smooth;
   /// Dilated passes: the frames of one phase, the merged result of all phases, and the

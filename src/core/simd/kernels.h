@@ -39,6 +39,11 @@ struct WindowPlane
   const float* inv_d2 = nullptr;
   const float* inv_s2 = nullptr;
   float d2 = 0.0f, s2 = 0.0f;
+  /// The padded planes the centre patch a(o) is taken from when this frame's patches are compared
+  /// (FrameTerm::patches; null: WindowTask::center).
+  const float* patch_x = nullptr;
+  const float* patch_y = nullptr;
+  const float* patch_z = nullptr;
 };
 
 /// Everything one row of the windowed evaluation reads. The per-pixel arrays hold the row's
