@@ -168,6 +168,14 @@ struct FilterParameters
   /// Similarity bandwidth of the other frames' patches (temporal filter, range-adaptive model
   /// with automatic s); see CrossFrameBandwidth. Default guarded (paper: spatial).
   CrossFrameBandwidth cross_frame_bandwidth = CrossFrameBandwidth::guarded;
+  /// With the guarded cross-frame bandwidths: compare the other frames' patches with a patch
+  /// guide, per pixel the mean of the current frame and the neighbours that did not move where
+  /// the per-pixel test of change found nothing within kGuideMargin pixels and the point itself
+  /// is within the test's threshold (FrameTerm::patches; docs/method.md, "The patch guide"),
+  /// instead of the current frame's own noisy patch, to which the non-local weights would
+  /// otherwise lean. Default true (paper: false). TemporalStream's causal and recursive windows
+  /// run without it (docs/method.md, "The patch guide").
+  bool patch_guide = true;
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;
 

@@ -96,6 +96,7 @@ FilterParameters::paper()
   p.outlier_sigmas = 0.0f;
   p.displacement = Displacement::normal;
   p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
+  p.patch_guide = false;
   p.dilation = 1;
   return p;
 }

@@ -831,11 +831,14 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 #pragma omp parallel for simd schedule(static) num_threads(threads)
             for (std::ptrdiff_t i = 0; i < size; ++i)
               out[i] = changed[i] ? none : out[i];
-            // A frame that did not move enters the guide with its points where neither they nor
-            // their surroundings within kGuideMargin pixels changed, weighted by the inverse of
-            // the frame's noise variance relative to the current frame's, (s_c / s_k)^2.
+            // A frame that did not move enters the guide with its points where the test found no
+            // change within kGuideMargin pixels and the point's own difference is within
+            // kGuideTolerance times the test's threshold (the 3 x 3 vote passes a lone pixel that
+            // changed, e.g. at the leading edge of an object in a dilated pass), weighted by the
+            // inverse of its noise variance relative to the current frame's, (s_c / s_k)^2, at
+            // most 1 (a smoothed neighbour does not outweigh the current frame).
             const float s_k = bandwidths[k].similarity, s_c = bandwidths[center].similarity;
-            if (!moved && s_k > 0.0f && s_c > 0.0f && std::isfinite(s_k) && std::isfinite(s_c)) {
+            if (parameters.patch_guide && !moved && s_k > 0.0f && s_c > 0.0f && std::isfinite(s_k) && std::isfinite(s_c)) {
               if (!guided) {
                 detail::copyGrid(current, guide, threads);
                 guide_weight.assign(n, 1.0f);
@@ -843,11 +846,15 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
               }
               std::vector<unsigned char>& widened = workspace.widened;
               detail::widenMask(changed, current.width, current.height, detail::kGuideMargin, threads, widened);
-              const float w = (s_c / s_k) * (s_c / s_k);
+              const float w = std::min(1.0f, (s_c / s_k) * (s_c / s_k));
               const Grid& other = *frames[k];
+              const float limit = detail::kGuideTolerance * detail::kChangeSigmas * 1.41421356f * ratio;
+              const float* __restrict sigma_c = workspace.profile_sigma.data();
+              const float* __restrict difference = along.data();
 #pragma omp parallel for schedule(static) num_threads(threads)
               for (std::ptrdiff_t i = 0; i < size; ++i)
-                if (guide.valid[i] && other.valid[i] && !widened[i]) {
+                if (guide.valid[i] && other.valid[i] && !widened[i] &&
+                    std::fabs(difference[i]) <= limit * std::max(sigma_c[i], g[i])) {
                   guide.x[i] += w * other.x[i];
                   guide.y[i] += w * other.y[i];
                   guide.z[i] += w * other.z[i];
