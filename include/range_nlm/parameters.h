@@ -173,8 +173,8 @@ struct FilterParameters
   /// the per-pixel test of change found nothing within kGuideMargin pixels and the point itself
   /// is within the test's threshold (FrameTerm::patches; docs/method.md, "The patch guide"),
   /// instead of the current frame's own noisy patch, to which the non-local weights would
-  /// otherwise lean. Default true (paper: false). TemporalStream's causal and recursive windows
-  /// run without it (docs/method.md, "The patch guide").
+  /// otherwise lean. Used when at least three neighbours enter the guide (radius 2 and more;
+  /// kGuideMinFrames in src/core/internal.h). Default true (paper: false).
   bool patch_guide = true;
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;

@@ -766,7 +766,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     // started with the current frame (weight 1).
     Grid& guide = workspace.guide;
     std::vector<float>& guide_weight = workspace.guide_weight;
-    bool guided = false;
+    int guide_frames = 0; // neighbours in the guide
     for (int k = 0; k < count; ++k) {
       if (!usable[k])
         continue;
@@ -839,10 +839,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
             // most 1 (a smoothed neighbour does not outweigh the current frame).
             const float s_k = bandwidths[k].similarity, s_c = bandwidths[center].similarity;
             if (parameters.patch_guide && !moved && s_k > 0.0f && s_c > 0.0f && std::isfinite(s_k) && std::isfinite(s_c)) {
-              if (!guided) {
+              if (guide_frames++ == 0) {
                 detail::copyGrid(current, guide, threads);
                 guide_weight.assign(n, 1.0f);
-                guided = true;
               }
               std::vector<unsigned char>& widened = workspace.widened;
               detail::widenMask(changed, current.width, current.height, detail::kGuideMargin, threads, widened);
@@ -878,7 +877,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       }
       terms.push_back(term);
     }
-    if (guided) {
+    // With fewer neighbours in it, each would find a large share of its own noise in the guide
+    // and its candidates would lean towards that instead (kGuideMinFrames).
+    if (guide_frames >= detail::kGuideMinFrames) {
       const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::ptrdiff_t i = 0; i < size; ++i) {

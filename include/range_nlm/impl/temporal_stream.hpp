@@ -80,16 +80,7 @@ TemporalStream<PointT>::filterAt(std::size_t t)
     }
     current = t - std::max(lo, first_);
   }
-  if (recursive_ || causal_) {
-    // Without the patch guide (docs/method.md, "The patch guide"): the recursive history
-    // already averages the past frames, and with one past frame the guide lets a moving
-    // edge's old side in (structured light: 1.01 mm against 0.97 per frame).
-    FilterParameters run = parameters_;
-    run.patch_guide = false;
-    filter_.setParameters(run);
-  } else {
-    filter_.setParameters(parameters_);
-  }
+  filter_.setParameters(parameters_);
   filter_.setFrames(frames, current);
   CloudPtr out(new PointCloud);
   try {
