@@ -767,6 +767,11 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     Grid& guide = workspace.guide;
     std::vector<float>& guide_weight = workspace.guide_weight;
     int guide_frames = 0; // neighbours in the guide
+    int neighbours = 0;   // usable frames other than the current one
+    for (int k = 0; k < count; ++k)
+      neighbours += usable[k] && k != center ? 1 : 0;
+    // Built only where it can be used (kGuideMinFrames): radius 1 does no work for it.
+    const bool may_guide = parameters.patch_guide && neighbours >= detail::kGuideMinFrames;
     for (int k = 0; k < count; ++k) {
       if (!usable[k])
         continue;
@@ -838,7 +843,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
             // inverse of its noise variance relative to the current frame's, (s_c / s_k)^2, at
             // most 1 (a smoothed neighbour does not outweigh the current frame).
             const float s_k = bandwidths[k].similarity, s_c = bandwidths[center].similarity;
-            if (parameters.patch_guide && !moved && s_k > 0.0f && s_c > 0.0f && std::isfinite(s_k) && std::isfinite(s_c)) {
+            if (may_guide && !moved && s_k > 0.0f && s_c > 0.0f && std::isfinite(s_k) && std::isfinite(s_c)) {
               if (guide_frames++ == 0) {
                 detail::copyGrid(current, guide, threads);
                 guide_weight.assign(n, 1.0f);
