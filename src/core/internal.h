@@ -123,8 +123,8 @@ widenMask(const std::vector<unsigned char>& mask, int width, int height, int rad
 constexpr int kGuideMargin = 2;
 /// The patch guide takes a neighbour's point only if its own difference along the normal is
 /// within this many times the per-pixel test's threshold (the 3 x 3 vote lets a lone changed
-/// pixel pass; measured: at a box's leading edge in the dilated passes of a recursive `stereo`
-/// run, points pulled 1 m toward the old background). 2: at 1, `tof` at radius 2 loses a
+/// pixel pass; measured: at a moving `stereo` box's leading edge in the dilated passes, points
+/// pulled up to 1 m toward the old background). 2: at 1, `tof` at radius 2 loses a
 /// third of the guide's gain (0.331 against 0.321 mm), while 2 and 3 measure the same.
 constexpr float kGuideTolerance = 2.0f;
 /// The patch guide is used when at least this many neighbours enter it (radius 2 and more).
