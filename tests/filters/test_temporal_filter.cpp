@@ -329,6 +329,20 @@ staticScene(NoiseModel noise, int frames, int width, int height)
   o.seed = 31;
   return renderSequence(o);
 }
+
+/// Flat RMSE of the centre frame (2) of a 5-frame sequence filtered with the default and
+/// `cross`, at `radius`.
+double
+centreFlatRmse(const std::vector<SyntheticFrame>& seq, int radius, CrossFrameBandwidth cross)
+{
+  std::vector<Cloud::ConstPtr> frames;
+  for (const SyntheticFrame& f : seq)
+    frames.emplace_back(new Cloud(f.noisy));
+  FilterParameters p = FilterParameters::recommended();
+  p.cross_frame_bandwidth = cross;
+  const auto out = filterSequence<pcl::PointXYZ>(frames, radius, false, p);
+  return evaluateFrame(seq[2].truth, *out[2]).flat_rmse;
+}
 } // namespace
 
 TEST(TemporalFilter, TemporalNoiseRatioIsSmallForIndependentNoiseAndLargeForCorrelatedNoise)
@@ -361,18 +375,9 @@ TEST(TemporalFilter, StaticSceneWithCorrelatedNoiseGainsFromTheOtherFrames)
   // beats the frame filtered alone by a clear margin, and by much more than with the paper's
   // cross-frame bandwidths, which take the other frames' patches for moved ones.
   const std::vector<SyntheticFrame> seq = staticScene(NoiseModel::stereo, 5, 160, 120);
-  std::vector<Cloud::ConstPtr> frames;
-  for (const SyntheticFrame& f : seq)
-    frames.emplace_back(new Cloud(f.noisy));
-  auto centreFlatRmse = [&](int radius, CrossFrameBandwidth cross) {
-    FilterParameters p = FilterParameters::recommended();
-    p.cross_frame_bandwidth = cross;
-    const auto out = filterSequence<pcl::PointXYZ>(frames, radius, false, p);
-    return evaluateFrame(seq[2].truth, *out[2]).flat_rmse;
-  };
-  const double alone = centreFlatRmse(0, CrossFrameBandwidth::temporal);
-  const double temporal = centreFlatRmse(2, CrossFrameBandwidth::temporal);
-  const double paper = centreFlatRmse(2, CrossFrameBandwidth::spatial);
+  const double alone = centreFlatRmse(seq, 0, CrossFrameBandwidth::temporal);
+  const double temporal = centreFlatRmse(seq, 2, CrossFrameBandwidth::temporal);
+  const double paper = centreFlatRmse(seq, 2, CrossFrameBandwidth::spatial);
   EXPECT_LT(temporal, 0.9 * alone) << "alone " << alone << ", temporal " << temporal;
   EXPECT_LT(temporal, 0.95 * paper) << "paper's cross-frame s " << paper << ", temporal " << temporal;
 }
@@ -385,18 +390,9 @@ TEST(TemporalFilter, StaticSceneWithIndependentNoiseIsAveragedThroughThePatchGui
   // weights no longer lean towards the centre frame's noise; `temporal` cross-frame bandwidths,
   // without the per-pixel test of change and so without a guide, stay above it.
   const std::vector<SyntheticFrame> seq = staticScene(NoiseModel::tof, 5, 640, 480);
-  std::vector<Cloud::ConstPtr> frames;
-  for (const SyntheticFrame& f : seq)
-    frames.emplace_back(new Cloud(f.noisy));
-  auto centreFlatRmse = [&](int radius, CrossFrameBandwidth cross) {
-    FilterParameters p = FilterParameters::recommended();
-    p.cross_frame_bandwidth = cross;
-    const auto out = filterSequence<pcl::PointXYZ>(frames, radius, false, p);
-    return evaluateFrame(seq[2].truth, *out[2]).flat_rmse;
-  };
-  const double alone = centreFlatRmse(0, CrossFrameBandwidth::guarded);
-  const double guided = centreFlatRmse(2, CrossFrameBandwidth::guarded);
-  const double unguided = centreFlatRmse(2, CrossFrameBandwidth::temporal);
+  const double alone = centreFlatRmse(seq, 0, CrossFrameBandwidth::guarded);
+  const double guided = centreFlatRmse(seq, 2, CrossFrameBandwidth::guarded);
+  const double unguided = centreFlatRmse(seq, 2, CrossFrameBandwidth::temporal);
   EXPECT_LT(guided, 0.7 * alone) << "alone " << alone << ", guided " << guided << ", unguided " << unguided;
   EXPECT_LT(guided, 0.95 * unguided) << "alone " << alone << ", guided " << guided << ", unguided " << unguided;
 }
