@@ -21,11 +21,13 @@ inverseSquare(float bandwidth);
 NormalField
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
                      const std::vector<float>& gate, int pass);
-/// The same into `normals` (resized as needed), with the padded planes in `planes` if given
-/// (resized as needed, so that repeated calls reuse it), else in memory of their own.
+/// The same into `normals` (resized as needed), with the padded planes in `planes` and pass 1's
+/// normals (pass 2 only) in `first` if given (resized as needed, so that repeated calls reuse
+/// them), else in memory of their own.
 void
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
-                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes);
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes,
+                     NormalField* first = nullptr);
 /// computeOffsets with the padded frames of the windowed evaluation in `planes` if given (resized
 /// as needed), else in memory of their own; the direct evaluation does not use it.
 void

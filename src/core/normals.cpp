@@ -177,7 +177,8 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
 
 void
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
-                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes)
+                     const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes,
+                     NormalField* first)
 {
   // Pass 1 (range gate): neighbours whose range differs from p_i's by more than gate[i] are left
   // out: no fit across a depth edge, but on steep slopes few neighbours remain. Pass 2 (plane
@@ -186,9 +187,12 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
   threads = detail::resolveThreads(threads);
   const PaddedGrid pad(grid, window / 2, viewpoint, threads, pass != 0, planes);
   if (pass == 2) {
-    NormalField first;
-    fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr, first);
-    fitNormals(grid, pad, window, viewpoint, threads, gate, 2, &first, normals);
+    // Pass 1's normals in `first` if given: a frame-sized field allocated afresh would be
+    // zero-filled and first touched by one thread.
+    NormalField own;
+    NormalField& pass1 = first ? *first : own;
+    fitNormals(grid, pad, window, viewpoint, threads, gate, 1, nullptr, pass1);
+    fitNormals(grid, pad, window, viewpoint, threads, gate, 2, &pass1, normals);
     return;
   }
   fitNormals(grid, pad, window, viewpoint, threads, gate, pass, nullptr, normals);
@@ -230,14 +234,8 @@ detail::presmoothAlongRays(const Grid& grid, int window, const std::vector<float
       const std::size_t row = static_cast<std::size_t>(v) * width;
       for (int u = 0; u < width; ++u)
         inv[u] = sigma[row + u] > 0.0f ? 1.0f / (2.0f * sigma[row + u] * sigma[row + u]) : 0.0f;
-      std::fill(num.begin(), num.end(), 0.0f);
-      std::fill(den.begin(), den.end(), 0.0f);
       const float* cr = &pad.rho[pad.at(0, v)];
-      for (int dv = -r; dv <= r; ++dv)
-        for (int du = -r; du <= r; ++du) {
-          const std::size_t k0 = pad.at(du, v + dv);
-          kernels.smoothing(cr, &pad.rho[k0], &pad.f[k0], inv.data(), width, num.data(), den.data());
-        }
+      kernels.window_smoothing(cr, &pad.f[pad.at(0, v)], pad.stride, r, inv.data(), width, num.data(), den.data());
       for (int u = 0; u < width; ++u) {
         const std::size_t i = row + u;
         if (!grid.valid[i] || !(cr[u] > 0.0f) || !(sigma[i] > 0.0f) || !(den[u] > 0.0f))

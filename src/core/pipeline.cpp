@@ -746,12 +746,12 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
                                  &workspace.normal_planes);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
-                                   normals, &workspace.normal_planes);
+                                   normals, &workspace.normal_planes, &workspace.first_normals);
     } else if (adaptive) {
       const std::vector<float>& gate = gateFor(sigma);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
-                                   normals, &workspace.normal_planes);
+                                   normals, &workspace.normal_planes, &workspace.first_normals);
     }
 
     stage.start(Stage::frame_terms);

@@ -354,7 +354,8 @@ struct Workspace
   std::vector<Grid> inputs;
   /// The last run's result.
   FilterRun run;
-  NormalField normals;
+  /// The normals, and the first of the gated fits' two passes.
+  NormalField normals, first_normals;
   std::vector<float> offsets, sigma, limit;
   /// Per-point ranges, profile values (the current frame's sigma, another frame's sigma,
   /// extent) and per-frame bandwidth maps of a run.

@@ -71,10 +71,13 @@ struct RowKernels
   /// acc[0..9] += w * (1, qx, qy, qz, qx qx, qx qy, qx qz, qy qy, qy qz, qz qz), each a row.
   void (*moments)(RowPointers c, const float* c_rho, RowPointers q, const float* q_rho, const float* gate,
                   const float* n0x, const float* n0y, const float* n0z, float range_on, int width, float* acc);
-  /// One neighbour offset of the range pre-smoothing: d = rho_j - rho_i,
-  /// w = flag_j exp(-d^2 inv[u]); num += w d; den += w.
-  void (*smoothing)(const float* c_rho, const float* q_rho, const float* q_flag, const float* inv, int width,
-                    float* num, float* den);
+  /// The range pre-smoothing of a row of centres over a whole (2r+1) x (2r+1) window: for the
+  /// offsets (dv, du) = (-r, -r) ... (r, r) in that order, d = rho_j - rho_i,
+  /// w = flag_j exp(-d^2 inv[u]), num[u] += w d, den[u] += w, from num = den = 0 (overwritten).
+  /// rho and flag point to the row's first centre in padded planes of row stride `stride`
+  /// (border >= r on every side).
+  void (*window_smoothing)(const float* rho, const float* flag, std::ptrdiff_t stride, int r, const float* inv,
+                           int width, float* num, float* den);
   /// The windowed evaluation of row v: the filtered offsets h of its lane_width pixels (0 for
   /// inactive ones) into `out`; `scratch` holds window_scratch() floats, aligned to 64 bytes.
   void (*window_row)(const WindowTask& task, int v, float* scratch, float* out);

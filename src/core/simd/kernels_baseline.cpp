@@ -29,7 +29,7 @@ const SimdKernels&
 baselineKernels()
 {
   static const SimdKernels kernels{
-    {&baseline::rows::moments, &baseline::rows::smoothing, &baseline::rows::window_row, &baseline::rows::window_scratch},
+    {&baseline::rows::moments, &baseline::rows::window_smoothing, &baseline::rows::window_row, &baseline::rows::window_scratch},
     baseline::plane_fits::kPlaneFitKernels};
   return kernels;
 }
