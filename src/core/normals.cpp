@@ -138,15 +138,32 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < height; ++v) {
       const std::size_t row = static_cast<std::size_t>(v) * width;
-      if (range_gated || plane_gated)
+      if (range_gated || plane_gated) {
+        // g = gate where valid, else 1e30; n0 = pass 1's normal where finite, else 0 (pass 2
+        // only). Branch-free with bit masks, so that it vectorizes.
+        const Bits* __restrict gv = reinterpret_cast<const Bits*>(&gate[row]);
+        const unsigned char* __restrict valid = &grid.valid[row];
+        Bits* __restrict gb = reinterpret_cast<Bits*>(g.data());
+        const Bits far = 0x7149f2cau; // 1e30f
+#pragma omp simd
         for (int u = 0; u < width; ++u) {
-          const std::size_t i = row + u;
-          g[u] = grid.valid[i] ? gate[i] : 1e30f;
-          const bool has = plane_gated && std::isfinite(first->nx[i]);
-          n0x[u] = has ? first->nx[i] : 0.0f;
-          n0y[u] = has ? first->ny[i] : 0.0f;
-          n0z[u] = has ? first->nz[i] : 0.0f;
+          const std::uint32_t keep = 0u - static_cast<std::uint32_t>(valid[u] != 0);
+          gb[u] = (gv[u] & keep) | (far & ~keep);
         }
+        if (plane_gated) {
+          const Bits* __restrict fx = reinterpret_cast<const Bits*>(&first->nx[row]);
+          const Bits* __restrict fy = reinterpret_cast<const Bits*>(&first->ny[row]);
+          const Bits* __restrict fz = reinterpret_cast<const Bits*>(&first->nz[row]);
+          Bits* __restrict bx = reinterpret_cast<Bits*>(n0x.data());
+          Bits* __restrict by = reinterpret_cast<Bits*>(n0y.data());
+          Bits* __restrict bz = reinterpret_cast<Bits*>(n0z.data());
+#pragma omp simd
+          for (int u = 0; u < width; ++u) {
+            const std::uint32_t finite = 0u - static_cast<std::uint32_t>((fx[u] & 0x7f800000u) != 0x7f800000u);
+            bx[u] = fx[u] & finite, by[u] = fy[u] & finite, bz[u] = fz[u] & finite;
+          }
+        }
+      }
       // All (2r+1)^2 offsets in one call, in the order the row kernel `moments` would take them,
       // with the sums of each block of centres kept in registers (plane_fit.inc).
       const std::size_t c0 = pad.at(0, v);
@@ -236,15 +253,27 @@ detail::presmoothAlongRays(const Grid& grid, int window, const std::vector<float
         inv[u] = sigma[row + u] > 0.0f ? 1.0f / (2.0f * sigma[row + u] * sigma[row + u]) : 0.0f;
       const float* cr = &pad.rho[pad.at(0, v)];
       kernels.window_smoothing(cr, &pad.f[pad.at(0, v)], pad.stride, r, inv.data(), width, num.data(), den.data());
+      // rho' = rho + weighted mean range difference; the point stays on its ray. Points without
+      // a valid range, sigma or weight keep their coordinates (selected, so that it vectorizes).
+      const unsigned char* __restrict valid = &grid.valid[row];
+      const float* __restrict sg = &sigma[row];
+      const float* __restrict gx = &grid.x[row];
+      const float* __restrict gy = &grid.y[row];
+      const float* __restrict gz = &grid.z[row];
+      float* __restrict ox = &out.x[row];
+      float* __restrict oy = &out.y[row];
+      float* __restrict oz = &out.z[row];
+      const float* __restrict nu = num.data();
+      const float* __restrict de = den.data();
+      const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+#pragma omp simd
       for (int u = 0; u < width; ++u) {
-        const std::size_t i = row + u;
-        if (!grid.valid[i] || !(cr[u] > 0.0f) || !(sigma[i] > 0.0f) || !(den[u] > 0.0f))
-          continue;
-        // rho' = rho + weighted mean range difference; the point stays on its ray.
-        const float scale = (cr[u] + num[u] / den[u]) / cr[u];
-        out.x[i] = viewpoint[0] + (grid.x[i] - viewpoint[0]) * scale;
-        out.y[i] = viewpoint[1] + (grid.y[i] - viewpoint[1]) * scale;
-        out.z[i] = viewpoint[2] + (grid.z[i] - viewpoint[2]) * scale;
+        const bool moves = (valid[u] != 0) & (cr[u] > 0.0f) & (sg[u] > 0.0f) & (de[u] > 0.0f);
+        const float scale = (cr[u] + nu[u] / de[u]) / cr[u];
+        const float mx = vx + (gx[u] - vx) * scale, my = vy + (gy[u] - vy) * scale, mz = vz + (gz[u] - vz) * scale;
+        ox[u] = moves ? mx : ox[u];
+        oy[u] = moves ? my : oy[u];
+        oz[u] = moves ? mz : oz[u];
       }
     }
   }
