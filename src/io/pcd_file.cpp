@@ -367,19 +367,24 @@ readLittleEndian32(const unsigned char* p)
   return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
 }
 
-/// Checks that a binary or binary_compressed body (`file` holds the whole file) holds exactly the
-/// points the header announces. (PCL's writer may leave bytes after the data: they are ignored.)
+/// Checks that a binary body of `body` bytes holds the points the header announces. (PCL's writer
+/// may leave bytes after the data: they are ignored.)
 void
-checkBinaryBody(const std::string& path, const PcdLayout& layout, const std::vector<unsigned char>& file)
+checkBinarySize(const std::string& path, const PcdLayout& layout, std::uint64_t body)
+{
+  const std::uint64_t bytes = layout.points * layout.point_step;
+  if (body < bytes)
+    fail(path, "truncated PCD body (binary: " + std::to_string(body) + " of " + std::to_string(bytes) +
+                   " bytes for " + std::to_string(layout.points) + " points)");
+}
+
+/// Checks that a binary_compressed body (`file` holds the whole file) decompresses to exactly the
+/// points the header announces.
+void
+checkCompressedBody(const std::string& path, const PcdLayout& layout, const std::vector<unsigned char>& file)
 {
   const std::uint64_t body = file.size() - layout.data_offset;
   const std::uint64_t bytes = layout.points * layout.point_step;
-  if (layout.data == PcdLayout::Data::binary) {
-    if (body < bytes)
-      fail(path, "truncated PCD body (binary: " + std::to_string(body) + " of " + std::to_string(bytes) +
-                     " bytes for " + std::to_string(layout.points) + " points)");
-    return;
-  }
   if (body < 8)
     fail(path, "truncated PCD body (binary_compressed: no size record)");
   for (const pcl::PCLPointField& f : layout.fields)
@@ -492,19 +497,27 @@ loadCloud(const std::string& path, bool organized, const MemoryBudget& budget)
     in.seekg(static_cast<std::streamoff>(layout.data_offset));
     if (!in || reader.readBodyASCII(in, blob, pcl::PCDReader::PCD_V7) < 0)
       fail(path, "cannot read the ascii PCD body");
+  } else if (layout.data == PcdLayout::Data::binary) {
+    // The body is the points' bytes as they are: read straight into the blob (PCL's reader
+    // copies them out of a copy of the file and then tests every element for NaN, which took
+    // most of a tool's reading time at VGA size).
+    const std::uint64_t bytes = layout.points * layout.point_step;
+    checkBinarySize(path, layout, file_size - layout.data_offset);
+    blob.data.resize(static_cast<std::size_t>(bytes));
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(layout.data_offset));
+    if (!in || !in.read(reinterpret_cast<char*>(blob.data.data()), static_cast<std::streamsize>(bytes)))
+      fail(path, "read error in the PCD body");
   } else {
     std::vector<unsigned char> file(static_cast<std::size_t>(file_size));
     std::ifstream in(path, std::ios::binary);
     if (!in.read(reinterpret_cast<char*>(file.data()), static_cast<std::streamsize>(file.size())))
       fail(path, "read error in the PCD body");
-    checkBinaryBody(path, layout, file);
+    checkCompressedBody(path, layout, file);
     blob.data.resize(layout.points * layout.point_step);
-    const bool compressed = layout.data == PcdLayout::Data::binary_compressed;
-    if (reader.readBodyBinary(file.data(), blob, pcl::PCDReader::PCD_V7, compressed,
+    if (reader.readBodyBinary(file.data(), blob, pcl::PCDReader::PCD_V7, true,
                               static_cast<unsigned int>(layout.data_offset)) < 0)
-      fail(path, compressed ? "corrupt binary_compressed PCD body (the LZF data does not decompress to "
-                              "WIDTH x HEIGHT points)"
-                            : "cannot read the binary PCD body");
+      fail(path, "corrupt binary_compressed PCD body (the LZF data does not decompress to WIDTH x HEIGHT points)");
   }
   if (blob.data.size() != layout.points * layout.point_step)
     fail(path, "PCD body does not hold width x height points");
@@ -523,6 +536,33 @@ xyzFromBlob(const LoadedCloud& loaded, const std::string& path)
   pcl::PointCloud<pcl::PointXYZ> cloud(blob.width, blob.height);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   bool dense = true;
+  cloud.sensor_origin_ = loaded.origin;
+  cloud.sensor_orientation_ = loaded.orientation;
+  if (fx->datatype == pcl::PCLPointField::FLOAT32 && fy->datatype == pcl::PCLPointField::FLOAT32 &&
+      fz->datatype == pcl::PCLPointField::FLOAT32) {
+    // Single floats (the common case): copied without a branch per point; a file with an
+    // infinite coordinate takes the loop below, which names the pixel.
+    bool infinite = false;
+    const std::uint8_t* __restrict data = blob.data.data();
+    const std::size_t step = blob.point_step, size = cloud.size();
+    for (std::size_t i = 0; i < size; ++i) {
+      const std::uint8_t* p = data + i * step;
+      float x, y, z;
+      std::memcpy(&x, p + fx->offset, sizeof x);
+      std::memcpy(&y, p + fy->offset, sizeof y);
+      std::memcpy(&z, p + fz->offset, sizeof z);
+      const bool invalid = std::isnan(x) | std::isnan(y) | std::isnan(z);
+      infinite |= std::isinf(x) | std::isinf(y) | std::isinf(z);
+      dense &= !invalid;
+      pcl::PointXYZ& q = cloud[i];
+      q.x = invalid ? nan : x, q.y = invalid ? nan : y, q.z = invalid ? nan : z;
+    }
+    if (!infinite) {
+      cloud.is_dense = dense;
+      return cloud;
+    }
+    dense = true;
+  }
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const std::uint8_t* p = &blob.data[i * blob.point_step];
     const double x = readCoordinate(p, *fx), y = readCoordinate(p, *fy), z = readCoordinate(p, *fz);
@@ -542,8 +582,6 @@ xyzFromBlob(const LoadedCloud& loaded, const std::string& path)
     }
   }
   cloud.is_dense = dense;
-  cloud.sensor_origin_ = loaded.origin;
-  cloud.sensor_orientation_ = loaded.orientation;
   return cloud;
 }
 
@@ -554,6 +592,22 @@ writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& b
   const pcl::PCLPointField* fy = findField(blob, "y");
   const pcl::PCLPointField* fz = findField(blob, "z");
   bool dense = true;
+  if (fx->datatype == pcl::PCLPointField::FLOAT32 && fy->datatype == pcl::PCLPointField::FLOAT32 &&
+      fz->datatype == pcl::PCLPointField::FLOAT32) {
+    // Single floats (the common case): no branch per point.
+    std::uint8_t* __restrict data = blob.data.data();
+    const std::size_t step = blob.point_step, size = xyz.size();
+    for (std::size_t i = 0; i < size; ++i) {
+      std::uint8_t* p = data + i * step;
+      const pcl::PointXYZ& q = xyz[i];
+      std::memcpy(p + fx->offset, &q.x, sizeof q.x);
+      std::memcpy(p + fy->offset, &q.y, sizeof q.y);
+      std::memcpy(p + fz->offset, &q.z, sizeof q.z);
+      dense &= std::isfinite(q.x) & std::isfinite(q.y) & std::isfinite(q.z);
+    }
+    blob.is_dense = dense;
+    return;
+  }
   for (std::size_t i = 0; i < xyz.size(); ++i) {
     std::uint8_t* p = &blob.data[i * blob.point_step];
     writeCoordinate(p, *fx, xyz[i].x);
