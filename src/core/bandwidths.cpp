@@ -798,12 +798,8 @@ detail::estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, 
   return detail::compareFrames(a, normals_a, b, sigma.data(), false, threads).ratio;
 }
 
-namespace
-{
-/// The mean of the smallest 80 % of `values` (non-negative; reordered): robust to depth edges,
-/// and unlike a median not stuck on the steps of a quantized depth unit.
 float
-robustMean(std::vector<float>& values)
+detail::robustMean(std::vector<float>& values)
 {
   const std::size_t keep = values.size() * 4 / 5;
   if (keep == 0)
@@ -835,7 +831,6 @@ robustMean(std::vector<float>& values)
     sum += values[i];
   return static_cast<float>(sum / keep);
 }
-} // namespace
 
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step)
@@ -885,10 +880,10 @@ detail::estimateNoiseCorrelation(const Grid& grid, int step, int threads)
     if (lag == 1)
       result.samples = values.size();
     if (relative.size() >= 64)
-      result.scale_in_footprints[lag - 1] = robustMean(relative);
+      result.scale_in_footprints[lag - 1] = detail::robustMean(relative);
     if (values.size() < 64)
       continue; // scale stays 0
-    result.scale[lag - 1] = robustMean(values);
+    result.scale[lag - 1] = detail::robustMean(values);
   }
   return result;
 }

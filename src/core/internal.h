@@ -75,6 +75,11 @@ framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int thre
 float
 medianOfNonNegative(const float* values, const unsigned char* mask, std::size_t n, int threads,
                     std::size_t* count = nullptr);
+/// The mean of the smallest 80 % of `values` (non-negative; reordered): robust to depth edges, and
+/// unlike a median not stuck on the steps of a quantized depth unit. 0 for fewer than two values.
+/// (The noise correlation's statistic, estimateNoiseCorrelation.)
+float
+robustMean(std::vector<float>& values);
 /// framesMoved and estimateTemporalNoiseRatio of one pair of frames in one pass over them.
 struct FrameComparison
 {

@@ -679,3 +679,32 @@ TEST(FramesMoved, MotionTestNoiseRatioAndTemporalRunDoNotDependOnTheThreadCount)
     EXPECT_TRUE(sameBits(runFilter({&b, &a, &c}, 1, p, kOrigin, {}).output, one.output)) << threads << " threads";
   }
 }
+
+// The noise correlation's statistic: the mean of the smallest 80 % of the values, found by a
+// histogram of their upper bits, is that of a full sort, with ties across the cut (a quantized
+// depth unit), zeros, values spread over many octaves and sizes down to 0 and 1.
+TEST(NoiseCorrelation, RobustMeanIsTheMeanOfTheSmallestFourFifths)
+{
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (std::size_t n : {0u, 1u, 2u, 5u, 64u, 1000u, 38411u})
+    for (int kind = 0; kind < 3; ++kind) {
+      std::vector<float> values(n);
+      for (float& v : values) {
+        const float u = unit(rng);
+        v = kind == 0   ? std::exp2(40.0f * u - 30.0f)                  // octaves 2^-30 .. 2^10
+            : kind == 1 ? 0.001f * std::floor(u * 8.0f)                   // 8 steps, ties at the cut
+                        : (unit(rng) < 0.3f ? 0.0f : 0.004f + 0.001f * u); // zeros and a narrow band
+      }
+      std::vector<float> sorted = values;
+      std::sort(sorted.begin(), sorted.end());
+      const std::size_t keep = n * 4 / 5;
+      double sum = 0.0;
+      for (std::size_t i = 0; i < keep; ++i)
+        sum += sorted[i];
+      const float expected = keep == 0 ? 0.0f : static_cast<float>(sum / keep);
+      std::vector<float> work = values;
+      EXPECT_FLOAT_EQ(detail::robustMean(work), expected) << "n " << n << " kind " << kind;
+    }
+}
+

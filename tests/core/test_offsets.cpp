@@ -138,6 +138,51 @@ TEST(Kernel, EveryInstructionSetBuildMatchesDirect)
     }
 }
 
+// The range pre-smoothing's window sums (RowKernels::window_smoothing) of every instruction-set
+// build against the scalar rule, one offset at a time in raster order, on widths around the
+// block of 16 centres (the last width % 16 take the scalar tail), with holes (flag 0) and
+// per-centre bandwidths, including 0 (inv = 0: every valid neighbour weighs 1).
+TEST(Kernel, PresmoothingWindowSumsOfEveryBuildAreTheScalarRule)
+{
+  const std::vector<const detail::RowKernels*> builds = detail::supportedRowKernels();
+  ASSERT_GE(builds.size(), 1u);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> range(0.8f, 3.0f), noise(-0.01f, 0.01f), unit(0.0f, 1.0f);
+  for (int r : {1, 3})
+    for (int width : {5, 16, 37}) {
+      const int rows = 2 * r + 1;
+      const std::ptrdiff_t stride = width + 2 * r;
+      std::vector<float> rho(static_cast<std::size_t>(stride) * rows), flag(rho.size()), inv(width);
+      for (std::size_t i = 0; i < rho.size(); ++i) {
+        flag[i] = unit(rng) < 0.15f ? 0.0f : 1.0f;
+        rho[i] = flag[i] > 0.0f ? 1.5f + noise(rng) : 0.0f;
+      }
+      for (int u = 0; u < width; ++u) {
+        const float sigma = u % 7 == 0 ? 0.0f : 0.002f + 0.01f * unit(rng);
+        inv[u] = sigma > 0.0f ? 1.0f / (2.0f * sigma * sigma) : 0.0f;
+      }
+      const float* centre = &rho[static_cast<std::size_t>(r) * stride + r];
+      const float* centre_flag = &flag[static_cast<std::size_t>(r) * stride + r];
+      for (std::size_t k = 0; k < builds.size(); ++k) {
+        std::vector<float> num(width, -1.0f), den(width, -1.0f);
+        builds[k]->window_smoothing(centre, centre_flag, stride, r, inv.data(), width, num.data(), den.data());
+        for (int u = 0; u < width; ++u) {
+          double nu = 0.0, de = 0.0;
+          for (int dv = -r; dv <= r; ++dv)
+            for (int du = -r; du <= r; ++du) {
+              const std::ptrdiff_t o = dv * stride + du + u;
+              const double d = double(centre[o]) - centre[u];
+              const double w = centre_flag[o] * std::exp(-d * d * inv[u]);
+              nu += w * d;
+              de += w;
+            }
+          EXPECT_NEAR(den[u], de, 1e-5 * (1.0 + de)) << "build " << k << " r " << r << " width " << width << " u " << u;
+          EXPECT_NEAR(num[u], nu, 1e-7 + 1e-5 * std::fabs(nu)) << "build " << k << " r " << r << " width " << width;
+        }
+      }
+    }
+}
+
 // A patch guide (FrameTerm::patches): the other frames' patches are compared with the guide's
 // patch around i instead of the centre frame's, in every instruction-set build as in the direct
 // evaluation, with holes where the guide and the frames differ, with guided and unguided terms
