@@ -155,32 +155,45 @@ medianOf(std::vector<float> v)
 
 void
 detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
-                           std::size_t n)
+                           std::size_t n, const std::vector<float>* ys2, float* out2)
 {
+  const bool second = ys2 && out2;
   if (xs.empty()) {
     std::fill(out, out + n, 0.0f);
+    if (second)
+      std::fill(out2, out2 + n, 0.0f);
     return;
   }
   // interpolate() for a block of points at a time, branch-free so that it vectorizes: the bin
   // [xs[lo], xs[lo + 1]] of x is found by a scan over the (strictly increasing) ranges instead of
-  // a binary search per point, and the same arithmetic follows.
+  // a binary search per point, and the same arithmetic follows. A second profile over the same
+  // ranges (ys2) shares the scan.
   const std::size_t bins = xs.size();
   const float front = xs.front(), back = xs.back(), first = ys.front(), last = ys.back();
+  const float first2 = second ? ys2->front() : 0.0f, last2 = second ? ys2->back() : 0.0f;
   constexpr std::size_t kBlock = 256;
   // The bin's ends as bits, chosen with masks (GCC turns a select into a branch here).
-  std::uint32_t xl[kBlock], yl[kBlock], xh[kBlock], yh[kBlock];
+  std::uint32_t xl[kBlock], yl[kBlock], xh[kBlock], yh[kBlock], zl[kBlock], zh[kBlock];
   const auto bits = [](float f) { return __builtin_bit_cast(std::uint32_t, f); };
+  const auto value = [](std::uint32_t b) { return __builtin_bit_cast(float, b); };
   for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
     const int m = static_cast<int>(std::min(kBlock, n - i0));
     const float* __restrict xv = x + i0;
     float* __restrict o = out + i0;
+    float* __restrict o2 = second ? out2 + i0 : nullptr;
     if (bins == 1) {
       for (int i = 0; i < m; ++i)
         o[i] = first;
+      if (second)
+        for (int i = 0; i < m; ++i)
+          o2[i] = first2;
       continue;
     }
     for (int i = 0; i < m; ++i)
       xl[i] = bits(xs[0]), yl[i] = bits(ys[0]), xh[i] = bits(xs[1]), yh[i] = bits(ys[1]);
+    if (second)
+      for (int i = 0; i < m; ++i)
+        zl[i] = bits((*ys2)[0]), zh[i] = bits((*ys2)[1]);
     for (std::size_t b = 1; b + 1 < bins; ++b) {
       const float xb = xs[b];
       const std::uint32_t bxb = bits(xb), byb = bits(ys[b]), bxn = bits(xs[b + 1]), byn = bits(ys[b + 1]);
@@ -191,15 +204,30 @@ detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float
         xh[i] = (bxn & past) | (xh[i] & ~past);
         yh[i] = (byn & past) | (yh[i] & ~past);
       }
+      if (second) {
+        const std::uint32_t bzb = bits((*ys2)[b]), bzn = bits((*ys2)[b + 1]);
+        for (int i = 0; i < m; ++i) {
+          const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
+          zl[i] = (bzb & past) | (zl[i] & ~past);
+          zh[i] = (bzn & past) | (zh[i] & ~past);
+        }
+      }
     }
     for (int i = 0; i < m; ++i) {
-      const float lx = __builtin_bit_cast(float, xl[i]), ly = __builtin_bit_cast(float, yl[i]);
-      const float hx = __builtin_bit_cast(float, xh[i]), hy = __builtin_bit_cast(float, yh[i]);
+      const float lx = value(xl[i]), ly = value(yl[i]), hx = value(xh[i]), hy = value(yh[i]);
       const float gap = hx - lx;
       const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
       const float mid = ly + t * (hy - ly);
       o[i] = xv[i] <= front ? first : (xv[i] >= back ? last : mid);
     }
+    if (second)
+      for (int i = 0; i < m; ++i) {
+        const float lx = value(xl[i]), ly = value(zl[i]), hx = value(xh[i]), hy = value(zh[i]);
+        const float gap = hx - lx;
+        const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
+        const float mid = ly + t * (hy - ly);
+        o2[i] = xv[i] <= front ? first2 : (xv[i] >= back ? last2 : mid);
+      }
   }
 }
 

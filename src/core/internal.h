@@ -36,9 +36,10 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
                const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>* planes);
 /// The piecewise linear interpolation of NoiseProfile::sigmaAt / extentAt (ranges xs, values ys)
 /// at the n points x into out, with the same result for every point, vectorized.
+/// With ys2 and out2 also the profile (xs, *ys2) into out2, in the same scan over the bins.
 void
 interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
-                   std::size_t n);
+                   std::size_t n, const std::vector<float>* ys2 = nullptr, float* out2 = nullptr);
 /// estimateNoiseProfile by `threads` threads (0 = OpenMP's default), with the same result.
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,

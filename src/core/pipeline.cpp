@@ -680,14 +680,21 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
   if (inverse_d2.size() < static_cast<std::size_t>(count))
     inverse_d2.resize(count), inverse_s2.resize(count);
   // profile.sigmaAt / extentAt of every point's range into `out`, in blocks by `threads` threads.
+  // With ys2 and out2 also that profile into out2, in the same scan.
   auto profileMap = [&](const std::vector<float>& xs, const std::vector<float>& ys, const std::vector<float>& rho,
-                        std::vector<float>& out) {
+                        std::vector<float>& out, const std::vector<float>* ys2 = nullptr,
+                        std::vector<float>* out2 = nullptr) {
     out.resize(n);
+    if (out2)
+      out2->resize(n);
     const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n), block = 4096;
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (std::ptrdiff_t lo = 0; lo < size; lo += block)
-      detail::interpolateProfile(xs, ys, &rho[lo], &out[lo], static_cast<std::size_t>(std::min(block, size - lo)));
+      detail::interpolateProfile(xs, ys, &rho[lo], &out[lo], static_cast<std::size_t>(std::min(block, size - lo)), ys2,
+                                 out2 ? &(*out2)[lo] : nullptr);
   };
+  // Per-point distance bandwidths from the profiles' extents (range-adaptive, d not given).
+  const bool own_d = adaptive && !(parameters.distance_bandwidth > 0.0f);
   for (int iteration = 0; iteration < parameters.iterations; ++iteration) {
     const Grid& current = run.output;
     StageTracker stage(observer, iteration);
@@ -726,7 +733,9 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         sigma[i] = bandwidths[center].similarity;
     } else {
       std::vector<float>& at = workspace.profile_sigma;
-      profileMap(profiles[center].range, profiles[center].sigma, rho, at);
+      // The current frame's extent map for its frame term too, in the same scan.
+      profileMap(profiles[center].range, profiles[center].sigma, rho, at, own_d ? &profiles[center].extent : nullptr,
+                 own_d ? &workspace.center_extent : nullptr);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         sigma[i] = current.valid[i] ? parameters.similarity_scale * at[i] : 0.0f;
@@ -786,15 +795,18 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         // The differences along the normals once (alongNormals), for the motion test, the ratio
         // (against the profile's sigma at the centre points' ranges, `sig`) and the per-pixel
         // test of change.
-        const bool own_d = !(parameters.distance_bandwidth > 0.0f), own_s = !(parameters.similarity_bandwidth > 0.0f);
+        const bool own_s = !(parameters.similarity_bandwidth > 0.0f);
         const bool guarded = parameters.cross_frame_bandwidth == CrossFrameBandwidth::guarded;
         const bool compared =
             k != center && (guarded || parameters.cross_frame_bandwidth == CrossFrameBandwidth::temporal);
         // The current frame's sigma map is the noise maps' (workspace.profile_sigma).
         std::vector<float>& sig = k == center ? workspace.profile_sigma : workspace.other_sigma;
-        std::vector<float>& ext = workspace.profile_extent;
+        // The current frame's extent map is the noise maps' too (workspace.center_extent); another
+        // frame's is taken in the scan of its sigma map.
+        std::vector<float>& ext = k == center ? workspace.center_extent : workspace.profile_extent;
         if (k != center && (own_d || own_s || compared))
-          profileMap(profiles[k].range, profiles[k].sigma, rho, sig);
+          profileMap(profiles[k].range, profiles[k].sigma, rho, sig, own_d ? &profiles[k].extent : nullptr,
+                     own_d ? &ext : nullptr);
         std::vector<float>& along = workspace.along;
         if (compared)
           detail::alongNormals(current, normals, *frames[k], threads, along);
@@ -812,7 +824,6 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
         }
         const bool cross = ratio > 1.0f;
         if (own_d) {
-          profileMap(profiles[k].range, profiles[k].extent, rho, ext);
           inverse_d2[k].resize(n);
           float* __restrict out = inverse_d2[k].data();
           const float* __restrict e = ext.data();

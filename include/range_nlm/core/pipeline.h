@@ -357,9 +357,9 @@ struct Workspace
   /// The normals, and the first of the gated fits' two passes.
   NormalField normals, first_normals;
   std::vector<float> offsets, sigma, limit;
-  /// Per-point ranges, profile values (the current frame's sigma, another frame's sigma,
-  /// extent) and per-frame bandwidth maps of a run.
-  std::vector<float> ranges, profile_sigma, other_sigma, profile_extent, range_sigma, gate;
+  /// Per-point ranges, profile values (the current frame's sigma and extent, another frame's sigma
+  /// and extent) and per-frame bandwidth maps of a run.
+  std::vector<float> ranges, profile_sigma, center_extent, other_sigma, profile_extent, range_sigma, gate;
   /// A neighbour's differences to the current frame along its normals, and the pixels of the
   /// current frame that changed against it (guarded cross-frame bandwidths).
   std::vector<float> along;
