@@ -153,6 +153,66 @@ medianOf(std::vector<float> v)
 }
 } // namespace
 
+namespace
+{
+/// detail::interpolateProfile, with the second profile (ys2, out2) if Second (then both non-null).
+template <bool Second>
+void
+interpolateProfiles(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                    std::size_t n, const std::vector<float>* ys2, float* out2)
+{
+  // interpolate() for a block of points at a time, branch-free so that it vectorizes: the bin
+  // [xs[lo], xs[lo + 1]] of x is found by a scan over the (strictly increasing) ranges instead of
+  // a binary search per point, and the same arithmetic follows. A second profile over the same
+  // ranges (ys2) shares the scan.
+  const std::size_t bins = xs.size();
+  const float front = xs.front(), back = xs.back();
+  const std::vector<float>& zs = Second ? *ys2 : ys;
+  constexpr std::size_t kBlock = 256;
+  // The bin's ends as bits, chosen with masks (GCC turns a select into a branch here).
+  std::uint32_t xl[kBlock], xh[kBlock], yl[kBlock], yh[kBlock], zl[kBlock], zh[kBlock];
+  const auto bits = [](float f) { return __builtin_bit_cast(std::uint32_t, f); };
+  const auto value = [](std::uint32_t b) { return __builtin_bit_cast(float, b); };
+  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+    const int m = static_cast<int>(std::min(kBlock, n - i0));
+    const float* __restrict xv = x + i0;
+    // The profile (xs, v) at the block's points into o, from the chosen bins' values lo, hi.
+    const auto finish = [&](const std::vector<float>& v, const std::uint32_t* lo, const std::uint32_t* hi,
+                            float* __restrict o) {
+      const float first = v.front(), last = v.back();
+      for (int i = 0; i < m; ++i) {
+        const float lx = value(xl[i]), ly = value(lo[i]), hx = value(xh[i]), hy = value(hi[i]);
+        const float gap = hx - lx;
+        const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
+        const float mid = bins == 1 ? first : ly + t * (hy - ly);
+        o[i] = xv[i] <= front ? first : (xv[i] >= back ? last : mid);
+      }
+    };
+    const std::size_t next = bins > 1 ? 1 : 0;
+    for (int i = 0; i < m; ++i) {
+      xl[i] = bits(xs[0]), xh[i] = bits(xs[next]), yl[i] = bits(ys[0]), yh[i] = bits(ys[next]);
+      if (Second)
+        zl[i] = bits(zs[0]), zh[i] = bits(zs[next]);
+    }
+    for (std::size_t b = 1; b + 1 < bins; ++b) {
+      const float xb = xs[b];
+      const std::uint32_t bxb = bits(xb), byb = bits(ys[b]), bzb = bits(zs[b]);
+      const std::uint32_t bxn = bits(xs[b + 1]), byn = bits(ys[b + 1]), bzn = bits(zs[b + 1]);
+      for (int i = 0; i < m; ++i) {
+        const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
+        xl[i] = (bxb & past) | (xl[i] & ~past), xh[i] = (bxn & past) | (xh[i] & ~past);
+        yl[i] = (byb & past) | (yl[i] & ~past), yh[i] = (byn & past) | (yh[i] & ~past);
+        if (Second)
+          zl[i] = (bzb & past) | (zl[i] & ~past), zh[i] = (bzn & past) | (zh[i] & ~past);
+      }
+    }
+    finish(ys, yl, yh, out + i0);
+    if (Second)
+      finish(zs, zl, zh, out2 + i0);
+  }
+}
+} // namespace
+
 void
 detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                            std::size_t n, const std::vector<float>* ys2, float* out2)
@@ -164,71 +224,10 @@ detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float
       std::fill(out2, out2 + n, 0.0f);
     return;
   }
-  // interpolate() for a block of points at a time, branch-free so that it vectorizes: the bin
-  // [xs[lo], xs[lo + 1]] of x is found by a scan over the (strictly increasing) ranges instead of
-  // a binary search per point, and the same arithmetic follows. A second profile over the same
-  // ranges (ys2) shares the scan.
-  const std::size_t bins = xs.size();
-  const float front = xs.front(), back = xs.back(), first = ys.front(), last = ys.back();
-  const float first2 = second ? ys2->front() : 0.0f, last2 = second ? ys2->back() : 0.0f;
-  constexpr std::size_t kBlock = 256;
-  // The bin's ends as bits, chosen with masks (GCC turns a select into a branch here).
-  std::uint32_t xl[kBlock], yl[kBlock], xh[kBlock], yh[kBlock], zl[kBlock], zh[kBlock];
-  const auto bits = [](float f) { return __builtin_bit_cast(std::uint32_t, f); };
-  const auto value = [](std::uint32_t b) { return __builtin_bit_cast(float, b); };
-  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
-    const int m = static_cast<int>(std::min(kBlock, n - i0));
-    const float* __restrict xv = x + i0;
-    float* __restrict o = out + i0;
-    float* __restrict o2 = second ? out2 + i0 : nullptr;
-    if (bins == 1) {
-      for (int i = 0; i < m; ++i)
-        o[i] = first;
-      if (second)
-        for (int i = 0; i < m; ++i)
-          o2[i] = first2;
-      continue;
-    }
-    for (int i = 0; i < m; ++i)
-      xl[i] = bits(xs[0]), yl[i] = bits(ys[0]), xh[i] = bits(xs[1]), yh[i] = bits(ys[1]);
-    if (second)
-      for (int i = 0; i < m; ++i)
-        zl[i] = bits((*ys2)[0]), zh[i] = bits((*ys2)[1]);
-    for (std::size_t b = 1; b + 1 < bins; ++b) {
-      const float xb = xs[b];
-      const std::uint32_t bxb = bits(xb), byb = bits(ys[b]), bxn = bits(xs[b + 1]), byn = bits(ys[b + 1]);
-      for (int i = 0; i < m; ++i) {
-        const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
-        xl[i] = (bxb & past) | (xl[i] & ~past);
-        yl[i] = (byb & past) | (yl[i] & ~past);
-        xh[i] = (bxn & past) | (xh[i] & ~past);
-        yh[i] = (byn & past) | (yh[i] & ~past);
-      }
-      if (second) {
-        const std::uint32_t bzb = bits((*ys2)[b]), bzn = bits((*ys2)[b + 1]);
-        for (int i = 0; i < m; ++i) {
-          const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
-          zl[i] = (bzb & past) | (zl[i] & ~past);
-          zh[i] = (bzn & past) | (zh[i] & ~past);
-        }
-      }
-    }
-    for (int i = 0; i < m; ++i) {
-      const float lx = value(xl[i]), ly = value(yl[i]), hx = value(xh[i]), hy = value(yh[i]);
-      const float gap = hx - lx;
-      const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
-      const float mid = ly + t * (hy - ly);
-      o[i] = xv[i] <= front ? first : (xv[i] >= back ? last : mid);
-    }
-    if (second)
-      for (int i = 0; i < m; ++i) {
-        const float lx = value(xl[i]), ly = value(zl[i]), hx = value(xh[i]), hy = value(zh[i]);
-        const float gap = hx - lx;
-        const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
-        const float mid = ly + t * (hy - ly);
-        o2[i] = xv[i] <= front ? first2 : (xv[i] >= back ? last2 : mid);
-      }
-  }
+  if (second)
+    interpolateProfiles<true>(xs, ys, x, out, n, ys2, out2);
+  else
+    interpolateProfiles<false>(xs, ys, x, out, n, nullptr, nullptr);
 }
 
 float

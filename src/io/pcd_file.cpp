@@ -536,33 +536,6 @@ xyzFromBlob(const LoadedCloud& loaded, const std::string& path)
   pcl::PointCloud<pcl::PointXYZ> cloud(blob.width, blob.height);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   bool dense = true;
-  cloud.sensor_origin_ = loaded.origin;
-  cloud.sensor_orientation_ = loaded.orientation;
-  if (fx->datatype == pcl::PCLPointField::FLOAT32 && fy->datatype == pcl::PCLPointField::FLOAT32 &&
-      fz->datatype == pcl::PCLPointField::FLOAT32) {
-    // Single floats (the common case): copied without a branch per point; a file with an
-    // infinite coordinate takes the loop below, which names the pixel.
-    bool infinite = false;
-    const std::uint8_t* __restrict data = blob.data.data();
-    const std::size_t step = blob.point_step, size = cloud.size();
-    for (std::size_t i = 0; i < size; ++i) {
-      const std::uint8_t* p = data + i * step;
-      float x, y, z;
-      std::memcpy(&x, p + fx->offset, sizeof x);
-      std::memcpy(&y, p + fy->offset, sizeof y);
-      std::memcpy(&z, p + fz->offset, sizeof z);
-      const bool invalid = std::isnan(x) | std::isnan(y) | std::isnan(z);
-      infinite |= std::isinf(x) | std::isinf(y) | std::isinf(z);
-      dense &= !invalid;
-      pcl::PointXYZ& q = cloud[i];
-      q.x = invalid ? nan : x, q.y = invalid ? nan : y, q.z = invalid ? nan : z;
-    }
-    if (!infinite) {
-      cloud.is_dense = dense;
-      return cloud;
-    }
-    dense = true;
-  }
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const std::uint8_t* p = &blob.data[i * blob.point_step];
     const double x = readCoordinate(p, *fx), y = readCoordinate(p, *fy), z = readCoordinate(p, *fz);
@@ -582,6 +555,8 @@ xyzFromBlob(const LoadedCloud& loaded, const std::string& path)
     }
   }
   cloud.is_dense = dense;
+  cloud.sensor_origin_ = loaded.origin;
+  cloud.sensor_orientation_ = loaded.orientation;
   return cloud;
 }
 
@@ -592,22 +567,6 @@ writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& b
   const pcl::PCLPointField* fy = findField(blob, "y");
   const pcl::PCLPointField* fz = findField(blob, "z");
   bool dense = true;
-  if (fx->datatype == pcl::PCLPointField::FLOAT32 && fy->datatype == pcl::PCLPointField::FLOAT32 &&
-      fz->datatype == pcl::PCLPointField::FLOAT32) {
-    // Single floats (the common case): no branch per point.
-    std::uint8_t* __restrict data = blob.data.data();
-    const std::size_t step = blob.point_step, size = xyz.size();
-    for (std::size_t i = 0; i < size; ++i) {
-      std::uint8_t* p = data + i * step;
-      const pcl::PointXYZ& q = xyz[i];
-      std::memcpy(p + fx->offset, &q.x, sizeof q.x);
-      std::memcpy(p + fy->offset, &q.y, sizeof q.y);
-      std::memcpy(p + fz->offset, &q.z, sizeof q.z);
-      dense &= std::isfinite(q.x) & std::isfinite(q.y) & std::isfinite(q.z);
-    }
-    blob.is_dense = dense;
-    return;
-  }
   for (std::size_t i = 0; i < xyz.size(); ++i) {
     std::uint8_t* p = &blob.data[i * blob.point_step];
     writeCoordinate(p, *fx, xyz[i].x);
