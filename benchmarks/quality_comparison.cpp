@@ -111,7 +111,9 @@ rangeNlmVariants(bool include_levers)
   p.cross_frame_bandwidth = CrossFrameBandwidth::guarded;
   v.emplace_back("  + automatic dilation, guarded cross-frame bandwidths", p);
   p.outlier_sigmas = 10.0f;
-  v.emplace_back("  + isolated outliers moved onto their neighbours' surface (= default)", p);
+  v.emplace_back("  + isolated outliers moved onto their neighbours' surface", p);
+  p.patch_edge_gate = 18.0f;
+  v.emplace_back("  + gated patches (= default)", p);
   FilterParameters q = FilterParameters::recommended();
   q.displacement = Displacement::line_of_sight;
   v.emplace_back("default + line of sight", q);

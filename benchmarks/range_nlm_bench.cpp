@@ -159,6 +159,8 @@ describe(const Settings& s)
     d << ", line of sight";
   if (p.outlier_sigmas > 0.0f)
     d << ", isolated outliers at " << p.outlier_sigmas << " sigma";
+  if (p.patch_edge_gate > 0.0f)
+    d << ", patch gate " << p.patch_edge_gate << " sigma";
   return d.str();
 }
 

@@ -141,6 +141,12 @@ struct FilterParameters
   /// the point are left out of a second fit (so it does not straddle depth edges or creases);
   /// 0 = off (paper). >= 0, default 3.
   float normal_edge_gate = 3.0f;
+  /// Gated patches: pixels of a centre's patch farther than this many noise sigmas from its
+  /// tangent plane (|n_i . (p_{i+o} - p_i)|) are left out of Sim(i, j), as holes are, so that a
+  /// point next to a depth edge is compared by the part of its patch on its own surface (the
+  /// other surface's pixels match no candidate away from the edge and would leave the point
+  /// almost unfiltered). 0 = off (paper). >= 0, default 18.
+  float patch_edge_gate = 18.0f;
   /// Smallest |cos| between normal and line of sight used by Displacement::line_of_sight: the
   /// ray step h / cos is computed with |cos| bounded below by it (at grazing angles 1 / cos would
   /// amplify any normal error); points always stay on their ray. In [0, 1], default 0.5.

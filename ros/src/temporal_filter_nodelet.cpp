@@ -96,6 +96,13 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
                                   std::to_string(outlier_sigmas));
     p.outlier_sigmas = outlier_sigmas;
   }
+  float patch_gate = 0.0f;
+  if (readNumber(node, "patch_gate", patch_gate)) {
+    if (!(patch_gate >= 0.0f) || !std::isfinite(patch_gate))
+      throw std::invalid_argument("parameter ~patch_gate must be a number >= 0 (0 = off), got " +
+                                  std::to_string(patch_gate));
+    p.patch_edge_gate = patch_gate;
+  }
   bool flag = false;
   if (readParameter(node, "direct", flag, "a boolean") && flag)
     p.evaluation = range_nlm::Evaluation::direct;

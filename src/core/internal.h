@@ -33,7 +33,8 @@ estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, i
 void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
-               const std::vector<unsigned char>& active, std::vector<float>& offsets, std::vector<float>* planes);
+               const std::vector<unsigned char>& active, std::vector<float>& offsets,
+               const std::vector<float>& patch_gate, std::vector<float>* planes);
 /// The piecewise linear interpolation of NoiseProfile::sigmaAt / extentAt (ranges xs, values ys)
 /// at the n points x into out, with the same result for every point, vectorized.
 /// With ys2 and out2 also the profile (xs, *ys2) into out2, in the same scan over the bins.
@@ -176,12 +177,12 @@ resolveThreads(int threads);
 void
 computeOffsetsDirect(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                      int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                     std::vector<float>& offsets);
+                     std::vector<float>& offsets, const std::vector<float>& patch_gate = {});
 /// The windowed evaluation (Evaluation::fast) with the fastest build of the SIMD kernels.
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                    int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                   std::vector<float>& offsets, std::vector<float>* planes);
+                   std::vector<float>& offsets, const std::vector<float>& patch_gate, std::vector<float>* planes);
 /// The windowed evaluation with the given build of the SIMD kernels; `offsets` has the size of
 /// the grid. The padded frames go into `planes` if given (resized as needed), else into memory of
 /// their own. For tests; computeOffsetsFast takes the fastest build.
@@ -189,7 +190,7 @@ void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       std::vector<float>* planes = nullptr);
+                       const std::vector<float>& patch_gate = {}, std::vector<float>* planes = nullptr);
 
 } // namespace detail
 } // namespace range_nlm

@@ -6,6 +6,7 @@
 #include "internal.h"
 
 #include <cmath>
+#include <limits>
 
 namespace range_nlm
 {
@@ -16,7 +17,7 @@ void
 computeOffsetsDirect(const Grid& center, const NormalField& normals,
                      const std::vector<FrameTerm>& frames, int search_window, int patch_size,
                      int threads, const std::vector<unsigned char>& active,
-                     std::vector<float>& offsets)
+                     std::vector<float>& offsets, const std::vector<float>& patch_gate)
 {
   const int width = center.width;
   const int height = center.height;
@@ -32,6 +33,8 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
         continue;
       const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
       const float px = center.x[i], py = center.y[i], pz = center.z[i];
+      // Pixels of the centre patch farther than this from its tangent plane count as holes.
+      const double gate = patch_gate.empty() ? std::numeric_limits<double>::infinity() : patch_gate[i];
       double num = 0.0, den = 0.0;
       for (const FrameTerm& term : frames) {
         const Grid& g = *term.grid;
@@ -57,6 +60,9 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
                   continue;
                 const int a = av * width + au, b = bv * width + bu;
                 if (!c.valid[a] || !g.valid[b])
+                  continue;
+                const double own = (double(c.x[a]) - px) * nx + (double(c.y[a]) - py) * ny + (double(c.z[a]) - pz) * nz;
+                if (std::fabs(own) > gate)
                   continue;
                 const double t = (double(c.x[a]) - g.x[b]) * nx + (double(c.y[a]) - g.y[b]) * ny +
                                  (double(c.z[a]) - g.z[b]) * nz;

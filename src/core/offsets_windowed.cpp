@@ -124,7 +124,7 @@ void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       std::vector<float>* storage)
+                       const std::vector<float>& patch_gate, std::vector<float>* storage)
 {
   const int width = center.width;
   const int height = center.height;
@@ -184,8 +184,8 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
 #pragma omp parallel num_threads(threads)
   {
     // Per thread: the kernel scratch (cache-line aligned), then the staged row: normal, active
-    // flag, 1 / d^2 and 1 / s^2 per frame, and the output.
-    const std::size_t row_floats = static_cast<std::size_t>(lane_width) * (5 + 2 * frame_count);
+    // flag, 1 / d^2 and 1 / s^2 per frame, the patch gate, and the output.
+    const std::size_t row_floats = static_cast<std::size_t>(lane_width) * (6 + 2 * frame_count);
     std::vector<float> storage(scratch_floats + row_floats + 16);
     const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(storage.data());
     float* scratch = storage.data() + ((64 - address % 64) % 64) / sizeof(float);
@@ -205,6 +205,9 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
     task.ny = field(1);
     task.nz = field(2);
     task.active = field(3);
+    float* const gate = field(5 + 2 * frame_count);
+    if (!patch_gate.empty())
+      task.gate = gate;
     for (std::size_t f = 0; f < frame_count; ++f) {
       if (frames[f].inverse_distance2)
         row_planes[f].inv_d2 = field(5 + 2 * f);
@@ -221,6 +224,10 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
                active.empty() ? valid : &active[first], width, field(0), field(1), field(2), field(3));
       for (int k = 0; k < 4; ++k)
         std::fill(field(k) + width, field(k) + lane_width, 0.0f);
+      if (task.gate) {
+        std::copy_n(&patch_gate[first], width, gate);
+        std::fill(gate + width, gate + lane_width, 0.0f);
+      }
       for (std::size_t f = 0; f < frame_count; ++f) {
         if (frames[f].inverse_distance2)
           std::copy_n(&(*frames[f].inverse_distance2)[first], width, field(5 + 2 * f));
@@ -236,10 +243,10 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                    int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                   std::vector<float>& offsets, std::vector<float>* planes)
+                   std::vector<float>& offsets, const std::vector<float>& patch_gate, std::vector<float>* planes)
 {
   computeOffsetsWindowed(rowKernels(), center, normals, frames, search_window, patch_size, threads, active, offsets,
-                         planes);
+                         patch_gate, planes);
 }
 
 } // namespace detail

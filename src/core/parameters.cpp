@@ -52,6 +52,8 @@ FilterParameters::validate() const
     fail("normal_presmooth_window", normal_presmooth_window, "must be 0 (off) or odd");
   if (!(std::isfinite(normal_edge_gate) && normal_edge_gate >= 0.0f))
     fail("normal_edge_gate", normal_edge_gate, "must be finite and >= 0 (0 = off)");
+  if (!(std::isfinite(patch_edge_gate) && patch_edge_gate >= 0.0f))
+    fail("patch_edge_gate", patch_edge_gate, "must be finite and >= 0 (0 = off)");
   if (!(line_of_sight_min_cos >= 0.0f && line_of_sight_min_cos <= 1.0f))
     fail("line_of_sight_min_cos", line_of_sight_min_cos, "must be in [0, 1]");
   if (!(std::isfinite(max_displacement) && max_displacement >= 0.0f))
@@ -91,6 +93,7 @@ FilterParameters::paper()
   p.normal_window = 3;
   p.normal_presmooth_window = 0;
   p.normal_edge_gate = 0.0f;
+  p.patch_edge_gate = 0.0f;
   p.bandwidth_model = BandwidthModel::global;
   p.max_displacement = 0.0f;
   p.outlier_sigmas = 0.0f;

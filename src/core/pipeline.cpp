@@ -113,17 +113,18 @@ resolveThreads(int threads)
 void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
-               const std::vector<unsigned char>& active, std::vector<float>& offsets)
+               const std::vector<unsigned char>& active, std::vector<float>& offsets,
+               const std::vector<float>& patch_gate)
 {
   detail::computeOffsets(center, normals, frames, search_window, patch_size, evaluation, threads, active, offsets,
-                         nullptr);
+                         patch_gate, nullptr);
 }
 
 void
 detail::computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                        int search_window, int patch_size, Evaluation evaluation, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       std::vector<float>* planes)
+                       const std::vector<float>& patch_gate, std::vector<float>* planes)
 {
   for (const FrameTerm& term : frames)
     if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height ||
@@ -131,14 +132,17 @@ detail::computeOffsets(const Grid& center, const NormalField& normals, const std
       throw std::invalid_argument("range_nlm: every frame (and patch guide) must have the size of the filtered frame");
   if (!active.empty() && active.size() != center.size())
     throw std::invalid_argument("range_nlm: the active mask must have one entry per point");
+  if (!patch_gate.empty() && patch_gate.size() != center.size())
+    throw std::invalid_argument("range_nlm: the patch gate must have one entry per point");
   // Both evaluations write every element.
   offsets.resize(center.size());
   threads = detail::resolveThreads(threads);
   if (evaluation == Evaluation::direct)
-    detail::computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets);
+    detail::computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets,
+                                 patch_gate);
   else
     detail::computeOffsetsFast(center, normals, frames, search_window, patch_size, threads, active, offsets,
-                               planes);
+                               patch_gate, planes);
 }
 
 void
@@ -913,8 +917,16 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       run.frame_weights = weights;
     }
     stage.start(Stage::offsets);
+    std::vector<float>& patch_gate = workspace.patch_gate;
+    patch_gate.clear();
+    if (parameters.patch_edge_gate > 0.0f) {
+      patch_gate.resize(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+      for (std::size_t i = 0; i < n; ++i)
+        patch_gate[i] = parameters.patch_edge_gate * sigma[i] / parameters.similarity_scale;
+    }
     detail::computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
-                           parameters.evaluation, threads, active, offsets, &workspace.window_planes);
+                           parameters.evaluation, threads, active, offsets, patch_gate, &workspace.window_planes);
     stage.start(Stage::displacement);
     std::vector<float>& limit = workspace.limit;
     if (parameters.max_displacement > 0.0f) {

@@ -230,6 +230,96 @@ TEST(Kernel, PatchGuideIsHonouredByEveryBuildAsByTheDirectEvaluation)
   EXPECT_THROW(computeOffsets(b, normals, {t}, 5, 3, Evaluation::fast, 1, {}, out), std::invalid_argument);
 }
 
+// The patch gate (FilterParameters::patch_edge_gate): centre patch pixels farther from i's tangent
+// plane than the gate count as holes, in every instruction-set build as in the direct evaluation:
+// with and without holes, three frames (one with a patch guide, whose patch is gated instead),
+// per-point gates that reach the step of randomSurface but not its noise, a gate of 0 (every
+// pixel off the plane left out) and gates that leave nothing out (the ungated result, to the bit).
+TEST(Kernel, PatchGateIsHonouredByEveryBuildAsByTheDirectEvaluation)
+{
+  const Viewpoint origin{0, 0, 0};
+  const std::vector<const detail::RowKernels*> builds = detail::supportedRowKernels();
+  ASSERT_GE(builds.size(), 1u);
+  for (int holes = 0; holes < 2; ++holes) {
+    const double p = holes ? 0.1 : 0.0;
+    const Grid a = randomSurface(37, 23, p, 80), b = randomSurface(37, 23, p, 81), c = randomSurface(37, 23, p, 82);
+    const Grid guide = randomSurface(37, 23, p, 83);
+    const NormalField normals = estimateNormals(b, 3, origin, 1);
+    FrameTerm ta{&a, 0.03f, 0.005f, 0.4f};
+    ta.patches = &guide;
+    const std::vector<FrameTerm> terms{ta, {&b, 0.02f, 0.004f, 1.0f}, {&c, 0.025f, 0.006f, 0.2f}};
+    std::vector<float> gate(b.size()), wide(b.size(), 1e3f);
+    for (std::size_t i = 0; i < gate.size(); ++i)
+      gate[i] = i % 11 == 0 ? 0.0f : 0.012f + 0.00003f * float(i % 401);
+    for (int patch : {3, 5, 7, 11}) {
+      std::vector<float> direct, ungated, fast_ungated(b.size(), -1.0f);
+      computeOffsets(b, normals, terms, 7, patch, Evaluation::direct, 2, {}, direct, gate);
+      computeOffsets(b, normals, terms, 7, patch, Evaluation::direct, 2, {}, ungated);
+      EXPECT_GT(maxDifference(direct, ungated), 1e-3) << "the gate must change the similarities next to the step";
+      for (std::size_t k = 0; k < builds.size(); ++k) {
+        std::vector<float> fast(b.size(), -1.0f);
+        detail::computeOffsetsWindowed(*builds[k], b, normals, terms, 7, patch, 2, {}, fast, gate);
+        EXPECT_LT(maxDifference(fast, direct), 2e-6) << "build " << k << " holes " << holes << " patch " << patch;
+        detail::computeOffsetsWindowed(*builds[k], b, normals, terms, 7, patch, 2, {}, fast, wide);
+        detail::computeOffsetsWindowed(*builds[k], b, normals, terms, 7, patch, 2, {}, fast_ungated);
+        EXPECT_EQ(fast, fast_ungated) << "build " << k << " holes " << holes << " patch " << patch;
+      }
+    }
+  }
+  const Grid b = randomSurface(20, 10, 0.0, 90);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  std::vector<float> out;
+  EXPECT_THROW(computeOffsets(b, normals, {{&b, 0.02f, 0.004f, 1.0f}}, 5, 3, Evaluation::fast, 1, {}, out,
+                              std::vector<float>(b.size() - 1, 1.0f)),
+               std::invalid_argument);
+}
+
+// What the gate is for: next to a depth step the patch of a point on the far surface holds pixels
+// of the near one, which only candidates at the same place along the step share (none where the
+// step is ragged), so without the gate such a point keeps most of its noise; with it, it is
+// compared by its own surface's pixels and averaged like the points away from the step. The
+// points away from the step do not change.
+TEST(Kernel, PatchGateFiltersThePointsBesideADepthStep)
+{
+  const Viewpoint origin{0, 0, 0};
+  const int w = 48, h = 40;
+  const double noise = 0.003;
+  const auto edge = [](int v) { return 22 + (v * 37) % 5; }; // a ragged step between columns 22 and 26
+  auto cloud = test::makeCloud(w, h, [&](double, double, int u, int v) { return u < edge(v) ? 1.0 : 1.4; }, noise, 21);
+  const Grid grid = Grid::fromInterleaved(&cloud[0].x, w, h, sizeof(pcl::PointXYZ) / sizeof(float));
+  // The normals of the two planes (facing the camera), as the gated fits give them.
+  NormalField normals = estimateNormals(grid, 3, origin, 1);
+  std::fill(normals.nx.begin(), normals.nx.end(), 0.0f);
+  std::fill(normals.ny.begin(), normals.ny.end(), 0.0f);
+  std::fill(normals.nz.begin(), normals.nz.end(), -1.0f);
+  const std::vector<FrameTerm> terms{{&grid, 0.05f, 3.0f * float(noise), 1.0f}};
+  const std::vector<float> gate(grid.size(), 18.0f * float(noise));
+  std::vector<float> gated, plain;
+  computeOffsets(grid, normals, terms, 9, 3, Evaluation::fast, 2, {}, gated, gate);
+  computeOffsets(grid, normals, terms, 9, 3, Evaluation::fast, 2, {}, plain);
+  // RMS of the filtered depth about its surface over the pixels `shift` columns right of the
+  // step in each row (0: the first far one, -1: the last near one), rows away from the border.
+  const auto rms = [&](const std::vector<float>& offsets, int shift) {
+    double sum = 0.0;
+    int count = 0;
+    for (int v = 6; v < h - 6; ++v) {
+      const int u = edge(v) + shift;
+      const std::size_t i = std::size_t(v) * w + u;
+      const double z = grid.z[i] + offsets[i]; // p' = p - h n, n = (0, 0, -1)
+      const double truth = u >= edge(v) ? 1.4 : 1.0;
+      sum += (z - truth) * (z - truth);
+      ++count;
+    }
+    return std::sqrt(sum / count);
+  };
+  for (int shift : {-1, 0}) {
+    EXPECT_GT(rms(plain, shift), 0.5 * noise) << "shift " << shift << ": without the gate the step's neighbours stay noisy";
+    EXPECT_LT(rms(gated, shift), 0.45 * rms(plain, shift)) << "shift " << shift;
+  }
+  for (int shift : {-16, -12, 12, 16})
+    EXPECT_NEAR(rms(gated, shift), rms(plain, shift), 0.02 * noise) << "shift " << shift;
+}
+
 TEST(Kernel, FastKeepsPrecisionWherePatchesStraddleADepthEdge)
 {
   // A 0.5 m step with 0.2 mm noise: patches that straddle the step at the same place have a

@@ -45,6 +45,8 @@ TEST(Parameters, DefaultsAreValidAndDocumentedValues)
   EXPECT_EQ(paper.similarity_scale, 1.0f);
   EXPECT_EQ(paper.bandwidth_model, range_nlm::BandwidthModel::global);
   EXPECT_EQ(paper.outlier_sigmas, 0.0f);
+  EXPECT_EQ(paper.patch_edge_gate, 0.0f);
+  EXPECT_EQ(p.patch_edge_gate, 18.0f);
   EXPECT_NO_THROW(p.validate());
   EXPECT_NO_THROW(FilterParameters::recommended().validate());
   EXPECT_NO_THROW(FilterParameters::paper().validate());
@@ -83,6 +85,12 @@ TEST(Parameters, OtherInvalidValuesAreRejectedByName)
   p = FilterParameters();
   p.normal_edge_gate = -1.0f;
   EXPECT_NE(messageOf(p).find("normal_edge_gate"), std::string::npos);
+  p = FilterParameters();
+  p.patch_edge_gate = -1.0f;
+  EXPECT_NE(messageOf(p).find("patch_edge_gate"), std::string::npos);
+  p = FilterParameters();
+  p.patch_edge_gate = std::numeric_limits<float>::infinity();
+  EXPECT_NE(messageOf(p).find("patch_edge_gate"), std::string::npos);
   p = FilterParameters();
   p.line_of_sight_min_cos = 1.5f;
   EXPECT_NE(messageOf(p).find("line_of_sight_min_cos"), std::string::npos);

@@ -227,6 +227,8 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   ros::param::set("/rnlm_centred/cross_frame", std::string("spatial"));
   // Outliers left where they are: each frame below has one, which the default would move.
   ros::param::set("/rnlm_centred/outlier_sigmas", 0.0);
+  // A tighter patch gate than the default's 18 sigmas changes the points around those outliers.
+  ros::param::set("/rnlm_centred/patch_gate", 4.0);
   ChildProcess node({nodeExecutable(), "__name:=rnlm_centred", "input:=/centred/in", "output:=/centred/out"},
                     g_master->directory() + "/rnlm_centred.log");
   ros::NodeHandle nh;
@@ -238,6 +240,7 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   centred.dilation = 2;
   centred.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
   centred.outlier_sigmas = 0.0f;
+  centred.patch_edge_gate = 4.0f;
   TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::centred, centred);
   std::vector<Cloud::Ptr> frames;
   for (int k = 0; k < 4; ++k) {

@@ -58,7 +58,8 @@ TEST_F(DenoiseTool, HelpListsEveryOptionWithDefaults)
   EXPECT_EQ(r.status, 0);
   for (const char* option : {"--search-window", "--patch", "--iterations", "--threads", "--distance-bandwidth",
                              "--similarity-bandwidth", "--seed", "--input-dir", "--output-dir", "--temporal-radius",
-                             "--causal", "--pass", "--preset", "--line-of-sight", "--along-normal", "--outlier-sigmas"})
+                             "--causal", "--pass", "--preset", "--line-of-sight", "--along-normal", "--outlier-sigmas",
+                             "--patch-gate"})
     EXPECT_NE(r.output.find(option), std::string::npos) << option;
   EXPECT_NE(r.output.find("(=42)"), std::string::npos);
 }
@@ -141,12 +142,15 @@ TEST_F(DenoiseTool, UsageErrorsExitWithTwo)
                                   std::string("--bogus"), std::string(""), path("in/a.pcd"),
                                   std::string("--preset fancy ") + path("in/a.pcd") + " " + path("o.pcd"),
                                   std::string("--outlier-sigmas -1 ") + path("in/a.pcd") + " " + path("o.pcd"),
+                                  std::string("--patch-gate -2 ") + path("in/a.pcd") + " " + path("o.pcd"),
                                   std::string("--line-of-sight --along-normal ") + path("in/a.pcd") + " " +
                                       path("o.pcd")}) {
     const Result r = test::runDenoise(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     if (args.rfind("--outlier-sigmas", 0) == 0)
       EXPECT_NE(r.output.find("outlier_sigmas = -1"), std::string::npos) << r.output;
+    if (args.rfind("--patch-gate", 0) == 0)
+      EXPECT_NE(r.output.find("patch_edge_gate = -2"), std::string::npos) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
     EXPECT_FALSE(fs::exists(path("o.pcd")));
   }

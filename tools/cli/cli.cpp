@@ -86,6 +86,7 @@ addFilterOptions(po::options_description& options)
     ("dilation", po::value<int>(), "spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is spatially correlated or strong, 1 otherwise), 1 = contiguous windows [preset: 0; paper: 1]")
     ("cross-frame", po::value<std::string>(), "temporal runs: s and d of the other frames: 'guarded' (raised to their frame-to-frame noise unless the frame moved), 'temporal' (always raised: a static camera), 'spatial' (their own spatial noise, the paper) [preset: guarded; paper: spatial]")
     ("outlier-sigmas", po::value<float>(), "isolated outliers (structured-light mismatches, time-of-flight flying pixels) farther than this many noise sigmas from all their neighbours are moved along their ray onto the neighbours' surface before filtering; 0 = off [preset: 10; paper: 0]")
+    ("patch-gate", po::value<float>(), "pixels of a point's patch farther than this many noise sigmas from its tangent plane (the other side of a depth edge) are left out of the patch comparison; 0 = off [preset: 18; paper: 0]")
     ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
     ("line-of-sight", "move points along their camera ray instead of the normal, also when filtered alone "
                       "(default: along the ray in temporal runs, along the normal otherwise)")
@@ -131,6 +132,8 @@ filterParametersFrom(const po::variables_map& vm)
   }
   if (vm.count("outlier-sigmas"))
     p.outlier_sigmas = vm["outlier-sigmas"].as<float>();
+  if (vm.count("patch-gate"))
+    p.patch_edge_gate = vm["patch-gate"].as<float>();
   if (vm.count("direct"))
     p.evaluation = Evaluation::direct;
   if (vm.count("line-of-sight") && vm.count("along-normal"))

@@ -259,10 +259,14 @@ struct FrameTerm
 /// with Sim(i, j) the mean of |(p_{i+o} - p_{j+o}) . n_i|^2 over the valid patch pairs.
 /// `active` (size of the grid, may be empty = all) selects the points to compute; h is 0 for
 /// other, invalid or normal-less points. All frames must have the size of `center`.
+/// `patch_gate` (size of the grid, may be empty = no gate; FilterParameters::patch_edge_gate):
+/// pixels o of i's patch with |n_i . (p_{i+o} - p_i)| > patch_gate[i] (p_{i+o} from the frame's
+/// patch guide if it names one) count as holes, i.e. their pairs are left out of Sim(i, j).
 void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
-               const std::vector<unsigned char>& active, std::vector<float>& offsets);
+               const std::vector<unsigned char>& active, std::vector<float>& offsets,
+               const std::vector<float>& patch_gate = {});
 
 /// Moves the active points by their offsets: p' = p - h n, or along the line of sight. With
 /// `limit` (size of the grid, may be empty) each displacement is clamped to |p' - p| <= limit[i].
@@ -356,7 +360,8 @@ struct Workspace
   FilterRun run;
   /// The normals, and the first of the gated fits' two passes.
   NormalField normals, first_normals;
-  std::vector<float> offsets, sigma, limit;
+  /// Offsets, local noise sigmas (times similarity_scale), displacement limits, patch gates.
+  std::vector<float> offsets, sigma, limit, patch_gate;
   /// Per-point ranges, profile values (the current frame's sigma and extent, another frame's sigma
   /// and extent) and per-frame bandwidth maps of a run.
   std::vector<float> ranges, profile_sigma, center_extent, other_sigma, profile_extent, range_sigma, gate;

@@ -58,6 +58,9 @@ struct WindowTask
   WindowPlane center;        // the filtered frame (its patches)
   const WindowPlane* frames = nullptr;
   int frame_count = 0;
+  /// The patch gate of the row's pixels (FilterParameters::patch_edge_gate): centre patch pixels
+  /// with |a(o)| above it count as holes. Null: no gate.
+  const float* gate = nullptr;
   const float* nx = nullptr;
   const float* ny = nullptr;
   const float* nz = nullptr;
