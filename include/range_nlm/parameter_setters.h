@@ -51,6 +51,11 @@ public:
   /// 0 = off (default 10; paper preset 0). See FilterParameters::outlier_sigmas.
   void setOutlierSigmas(float sigmas) { parameters_.outlier_sigmas = sigmas; }
   float getOutlierSigmas() const { return parameters_.outlier_sigmas; }
+  /// Gated patches: pixels of a point's patch farther than this many noise sigmas from its
+  /// tangent plane are left out of the patch comparison; 0 = off (default 18; paper preset 0).
+  /// See FilterParameters::patch_edge_gate.
+  void setPatchEdgeGate(float sigmas) { parameters_.patch_edge_gate = sigmas; }
+  float getPatchEdgeGate() const { return parameters_.patch_edge_gate; }
   /// Displacement along the normal (default) or along the line of sight (the point stays on its
   /// camera ray).
   void setDisplacement(Displacement d) { parameters_.displacement = d; }

@@ -582,3 +582,36 @@ TEST(NonLocalMeansFilter, IsolatedOutliersAreMovedOntoTheSurfaceAndCounted)
   f.filter(out);
   EXPECT_EQ(f.getOutliersMoved(), 0u);
 }
+
+TEST(NonLocalMeansFilter, PatchEdgeGateSetterReachesTheFilter)
+{
+  // A ragged depth step: the default's gated patches move the points beside it differently from
+  // patches compared whole; the setter gives what the parameter gives, and an invalid value is
+  // refused by name when filtering.
+  const Cloud in = test::makeCloud(48, 40, [](double, double, int u, int v) { return u < 22 + (v * 37) % 5 ? 1.0 : 1.4; },
+                                   0.003, 21);
+  NonLocalMeansFilter<pcl::PointXYZ> f;
+  EXPECT_EQ(f.getPatchEdgeGate(), 18.0f);
+  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+  Cloud gated, open;
+  f.filter(gated);
+  f.setPatchEdgeGate(0.0f);
+  EXPECT_EQ(f.getPatchEdgeGate(), 0.0f);
+  f.filter(open);
+  FilterParameters off = FilterParameters::recommended();
+  off.patch_edge_gate = 0.0f;
+  const Cloud expected = filtered(in, off);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    EXPECT_EQ(open[i].z, expected[i].z) << i;
+    differ += gated[i].z != open[i].z;
+  }
+  EXPECT_GT(differ, 40u);
+  f.setPatchEdgeGate(-1.0f);
+  try {
+    f.filter(open);
+    ADD_FAILURE() << "a negative patch gate must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("patch_edge_gate"), std::string::npos) << e.what();
+  }
+}
