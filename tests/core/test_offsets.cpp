@@ -313,7 +313,8 @@ TEST(Kernel, PatchGateFiltersThePointsBesideADepthStep)
     return std::sqrt(sum / count);
   };
   for (int shift : {-1, 0}) {
-    EXPECT_GT(rms(plain, shift), 0.5 * noise) << "shift " << shift << ": without the gate the step's neighbours stay noisy";
+    EXPECT_GT(rms(plain, shift), 0.5 * noise)
+        << "shift " << shift << ": without the gate the step's neighbours stay noisy";
     EXPECT_LT(rms(gated, shift), 0.45 * rms(plain, shift)) << "shift " << shift;
   }
   for (int shift : {-16, -12, 12, 16})

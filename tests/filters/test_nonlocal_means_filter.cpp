@@ -588,8 +588,8 @@ TEST(NonLocalMeansFilter, PatchEdgeGateSetterReachesTheFilter)
   // A ragged depth step: the default's gated patches move the points beside it differently from
   // patches compared whole; the setter gives what the parameter gives, and an invalid value is
   // refused by name when filtering.
-  const Cloud in = test::makeCloud(48, 40, [](double, double, int u, int v) { return u < 22 + (v * 37) % 5 ? 1.0 : 1.4; },
-                                   0.003, 21);
+  const auto ragged = [](double, double, int u, int v) { return u < 22 + (v * 37) % 5 ? 1.0 : 1.4; };
+  const Cloud in = test::makeCloud(48, 40, ragged, 0.003, 21);
   NonLocalMeansFilter<pcl::PointXYZ> f;
   EXPECT_EQ(f.getPatchEdgeGate(), 18.0f);
   f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
