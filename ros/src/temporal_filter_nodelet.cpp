@@ -5,6 +5,7 @@
 #include <cmath>
 #include <exception>
 #include <string>
+#include <utility>
 
 namespace range_nlm_ros
 {
@@ -89,19 +90,16 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
       (std::string(name) == "distance_bandwidth" ? p.distance_bandwidth : p.similarity_bandwidth) = value;
     }
   }
-  float outlier_sigmas = 0.0f;
-  if (readNumber(node, "outlier_sigmas", outlier_sigmas)) {
-    if (!(outlier_sigmas >= 0.0f) || !std::isfinite(outlier_sigmas))
-      throw std::invalid_argument("parameter ~outlier_sigmas must be a number >= 0 (0 = off), got " +
-                                  std::to_string(outlier_sigmas));
-    p.outlier_sigmas = outlier_sigmas;
-  }
-  float patch_gate = 0.0f;
-  if (readNumber(node, "patch_gate", patch_gate)) {
-    if (!(patch_gate >= 0.0f) || !std::isfinite(patch_gate))
-      throw std::invalid_argument("parameter ~patch_gate must be a number >= 0 (0 = off), got " +
-                                  std::to_string(patch_gate));
-    p.patch_edge_gate = patch_gate;
+  // Thresholds in noise sigmas, 0 = off.
+  for (const auto& [name, target] : {std::pair<const char*, float*>{"outlier_sigmas", &p.outlier_sigmas},
+                                     std::pair<const char*, float*>{"patch_gate", &p.patch_edge_gate}}) {
+    float value = 0.0f;
+    if (readNumber(node, name, value)) {
+      if (!(value >= 0.0f) || !std::isfinite(value))
+        throw std::invalid_argument(std::string("parameter ~") + name + " must be a number >= 0 (0 = off), got " +
+                                    std::to_string(value));
+      *target = value;
+    }
   }
   bool flag = false;
   if (readParameter(node, "direct", flag, "a boolean") && flag)

@@ -6,7 +6,6 @@
 #include "internal.h"
 
 #include <cmath>
-#include <limits>
 
 namespace range_nlm
 {
@@ -34,7 +33,8 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
       const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
       const float px = center.x[i], py = center.y[i], pz = center.z[i];
       // Pixels of the centre patch farther than this from its tangent plane count as holes.
-      const double gate = patch_gate.empty() ? std::numeric_limits<double>::infinity() : patch_gate[i];
+      const bool gated = !patch_gate.empty();
+      const double gate = gated ? patch_gate[i] : 0.0;
       double num = 0.0, den = 0.0;
       for (const FrameTerm& term : frames) {
         const Grid& g = *term.grid;
@@ -61,8 +61,8 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
                 const int a = av * width + au, b = bv * width + bu;
                 if (!c.valid[a] || !g.valid[b])
                   continue;
-                const double own = (double(c.x[a]) - px) * nx + (double(c.y[a]) - py) * ny + (double(c.z[a]) - pz) * nz;
-                if (std::fabs(own) > gate)
+                if (gated && std::fabs((double(c.x[a]) - px) * nx + (double(c.y[a]) - py) * ny +
+                                       (double(c.z[a]) - pz) * nz) > gate)
                   continue;
                 const double t = (double(c.x[a]) - g.x[b]) * nx + (double(c.y[a]) - g.y[b]) * ny +
                                  (double(c.z[a]) - g.z[b]) * nz;

@@ -716,14 +716,16 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       stage.start(Stage::bandwidths);
       estimateFrame(center, current, &normals, 0.0f);
     }
-    auto gateFor = [&](const std::vector<float>& sig) -> const std::vector<float>& {
-      std::vector<float>& gate = workspace.gate;
+    // Per-point gates of `sigmas` noise sigmas (sig: the local noise sigma times similarity_scale)
+    // into `gate`; empty (no gate) for 0.
+    auto gateInto = [&](float sigmas, const std::vector<float>& sig,
+                        std::vector<float>& gate) -> const std::vector<float>& {
       gate.clear();
-      if (parameters.normal_edge_gate > 0.0f) {
+      if (sigmas > 0.0f) {
         gate.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
         for (std::size_t i = 0; i < n; ++i)
-          gate[i] = parameters.normal_edge_gate * sig[i] / parameters.similarity_scale;
+          gate[i] = sigmas * sig[i] / parameters.similarity_scale;
       }
       return gate;
     };
@@ -750,7 +752,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::size_t i = 0; i < n; ++i)
         range_sigma[i] = parameters.normal_presmooth_range * sigma[i] / parameters.similarity_scale;
-      const std::vector<float>& gate = gateFor(sigma);
+      const std::vector<float>& gate = gateInto(parameters.normal_edge_gate, sigma, workspace.gate);
       stage.start(Stage::presmoothing);
       // The padded planes of the pre-smoothing are those of the normal fits that follow (not
       // needed by then).
@@ -761,7 +763,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       detail::estimateNormalsGated(smooth, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
                                    normals, &workspace.normal_planes, &workspace.first_normals);
     } else if (adaptive) {
-      const std::vector<float>& gate = gateFor(sigma);
+      const std::vector<float>& gate = gateInto(parameters.normal_edge_gate, sigma, workspace.gate);
       stage.start(Stage::normals);
       detail::estimateNormalsGated(current, parameters.normal_window, viewpoint, threads, gate, gate.empty() ? 0 : 2,
                                    normals, &workspace.normal_planes, &workspace.first_normals);
@@ -917,14 +919,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
       run.frame_weights = weights;
     }
     stage.start(Stage::offsets);
-    std::vector<float>& patch_gate = workspace.patch_gate;
-    patch_gate.clear();
-    if (parameters.patch_edge_gate > 0.0f) {
-      patch_gate.resize(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-      for (std::size_t i = 0; i < n; ++i)
-        patch_gate[i] = parameters.patch_edge_gate * sigma[i] / parameters.similarity_scale;
-    }
+    const std::vector<float>& patch_gate = gateInto(parameters.patch_edge_gate, sigma, workspace.patch_gate);
     detail::computeOffsets(current, normals, terms, parameters.search_window, parameters.patch_size,
                            parameters.evaluation, threads, active, offsets, patch_gate, &workspace.window_planes);
     stage.start(Stage::displacement);
