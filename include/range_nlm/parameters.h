@@ -161,9 +161,10 @@ struct FilterParameters
   /// Isolated outliers: before filtering, a point of the current frame farther in range than this
   /// many noise sigmas (of the frame's noise profile at its range; at least 3 pixel footprints)
   /// from each of its valid 8-neighbours and from the straight continuation of each neighbour's
-  /// line through it, and well beyond the range steps of its 5 x 5 surroundings, is moved along
-  /// its ray to the median range of the neighbours that lie on a surface (correctIsolatedPoints
-  /// in core/pipeline.h). These are the block
+  /// line through it (or near only one neighbour that is near none of its own others), and well
+  /// beyond the range steps of its 5 x 5 surroundings, is moved along its ray to the median range
+  /// of the neighbours that lie on a surface (correctIsolatedPoints in core/pipeline.h). These are
+  /// the block
   /// matching mismatches of structured-light sensors and the mixed ("flying") pixels of
   /// time-of-flight cameras at depth edges, which no patch resembles, so that the non-local
   /// weights leave them where they are. No point is removed. 0 = off (the paper). >= 0,

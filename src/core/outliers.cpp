@@ -103,26 +103,54 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   const auto validAt = [&](int u, int v) {
     return u >= 0 && v >= 0 && u < width && v < height && rho[static_cast<std::size_t>(v) * width + u] > 0.0f;
   };
-  // Whether point (a, b) lies on a surface with one of its valid 8-neighbours other than pixel
-  // (skip_a, skip_b): within `sigmas` noise sigmas at its range of the neighbour's range, or of the
-  // straight continuation 2 rho_j - rho_j' of the line from the pixel j' beyond the neighbour
-  // (a surface steep to the rays).
-  const auto onSurface = [&](int a, int b, int skip_a, int skip_b) {
+  // Whether point (a, b) agrees with its valid 8-neighbour (c, d): within `sigmas` noise sigmas at
+  // its range of the neighbour's range, or of the straight continuation 2 rho_j - rho_j' of the
+  // line from the pixel j' beyond the neighbour (a surface steep to the rays), j' other than pixel
+  // (skip_a, skip_b).
+  const auto agrees = [&](int a, int b, int c, int d, float r, float tol, int skip_a, int skip_b) {
+    const float near = rho[static_cast<std::size_t>(d) * width + c];
+    if (std::fabs(near - r) <= tol)
+      return true;
+    const int e = 2 * c - a, f = 2 * d - b;
+    if (!validAt(e, f) || (e == skip_a && f == skip_b))
+      return false;
+    const float beyond = rho[static_cast<std::size_t>(f) * width + e];
+    return std::fabs(2.0f * near - beyond - r) <= tol;
+  };
+  // Whether point (a, b) agrees with one of its valid 8-neighbours other than pixel (skip_a, skip_b).
+  const auto agreesWithANeighbour = [&](int a, int b, int skip_a, int skip_b) {
     const float r = rho[static_cast<std::size_t>(b) * width + a];
     const float tol = toleranceAt(r);
     for (int dv = -1; dv <= 1; ++dv)
       for (int du = -1; du <= 1; ++du) {
-        const int c = a + du, d = b + dv, e = c + du, f = d + dv;
+        const int c = a + du, d = b + dv;
         if ((du == 0 && dv == 0) || (c == skip_a && d == skip_b) || !validAt(c, d))
           continue;
-        const float near = rho[static_cast<std::size_t>(d) * width + c];
-        if (std::fabs(near - r) <= tol)
-          return true;
-        if (validAt(e, f) && !(e == skip_a && f == skip_b) &&
-            std::fabs(2.0f * near - rho[static_cast<std::size_t>(f) * width + e] - r) <= tol)
+        if (agrees(a, b, c, d, r, tol, skip_a, skip_b))
           return true;
       }
     return false;
+  };
+  // Whether point (a, b) lies on a surface: it agrees with two valid 8-neighbours other than pixel
+  // (skip_a, skip_b), or with one that agrees in turn with one of its own neighbours other than
+  // (a, b). Two points that agree only with each other (two mixed pixels of a time-of-flight edge
+  // at similar ranges, or one in line with a mixed and a surface point by chance) are no surface.
+  const auto onSurface = [&](int a, int b, int skip_a, int skip_b) {
+    const float r = rho[static_cast<std::size_t>(b) * width + a];
+    const float tol = toleranceAt(r);
+    int lone_c = -1, lone_d = -1; // the one neighbour agreed with so far; -1: none
+    for (int dv = -1; dv <= 1; ++dv)
+      for (int du = -1; du <= 1; ++du) {
+        const int c = a + du, d = b + dv;
+        if ((du == 0 && dv == 0) || (c == skip_a && d == skip_b) || !validAt(c, d) ||
+            !agrees(a, b, c, d, r, tol, skip_a, skip_b))
+          continue;
+        if (lone_c >= 0)
+          return true;
+        lone_c = c;
+        lone_d = d;
+      }
+    return lone_c >= 0 && agreesWithANeighbour(lone_c, lone_d, a, b);
   };
   // Rows are independent and each thread's finds are merged in row order: the result does not
   // depend on the number of threads.
@@ -133,7 +161,7 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
     std::vector<unsigned char> candidate(width);
 #pragma omp for schedule(dynamic, 8)
     for (int v = 0; v < height; ++v) {
-      // Inside the frame, a point within the smallest tolerance of one of its 8 neighbours is no
+      // Inside the frame, a point within the smallest tolerance of two of its 8 neighbours is no
       // outlier: one branch-free pass over the row (an invalid neighbour has range 0 and a valid
       // point a positive one). The others, and the frame's border, take the whole test.
       std::fill(candidate.begin(), candidate.end(), 1);
@@ -145,15 +173,16 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
         for (int u = 1; u + 1 < width; ++u) {
           const float r = row[u];
           const auto close = [&](float q) { return (q > 0.0f) & (std::fabs(q - r) <= smallest); };
-          const bool agrees = close(above[u - 1]) | close(above[u]) | close(above[u + 1]) | close(row[u - 1]) |
-                              close(row[u + 1]) | close(below[u - 1]) | close(below[u]) | close(below[u + 1]);
-          flag[u] = !agrees;
+          const int close_ones = close(above[u - 1]) + close(above[u]) + close(above[u + 1]) + close(row[u - 1]) +
+                                 close(row[u + 1]) + close(below[u - 1]) + close(below[u]) + close(below[u + 1]);
+          flag[u] = close_ones < 2;
         }
       }
       for (int u = 0; u < width; ++u) {
         const std::size_t i = static_cast<std::size_t>(v) * width + u;
-        if (!candidate[u] || !grid.valid[i] || (!active.empty() && !active[i]) || !(rho[i] > 0.0f) ||
-            onSurface(u, v, -1, -1))
+        if (!candidate[u] || !grid.valid[i] || (!active.empty() && !active[i]) || !(rho[i] > 0.0f))
+          continue;
+        if (onSurface(u, v, -1, -1))
           continue;
         const float r = rho[i];
         float neighbours[8];
@@ -185,12 +214,6 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
             if (b < kSurroundReach && usable(a, b + 1))
               steps.push_back(std::fabs(rho[static_cast<std::size_t>(v + b + 1) * width + u + a] - ra));
           }
-        if (!steps.empty()) {
-          std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-          const float typical = kSurroundSteps * steps[steps.size() / 2];
-          if (std::any_of(neighbours, neighbours + count, [&](float q) { return std::fabs(q - r) <= typical; }))
-            continue;
-        }
         // The neighbours that lie on a surface themselves (next to a time-of-flight edge, half
         // of them may be mixed pixels too); none: the point stays, nothing tells where it belongs.
         int kept = 0;
@@ -200,6 +223,13 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
               neighbours[kept++] = rho[static_cast<std::size_t>(v + dv) * width + u + du];
         if (kept == 0)
           continue;
+        // A point within those steps of one of them is on their surface.
+        if (!steps.empty()) {
+          std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+          const float typical = kSurroundSteps * steps[steps.size() / 2];
+          if (std::any_of(neighbours, neighbours + kept, [&](float q) { return std::fabs(q - r) <= typical; }))
+            continue;
+        }
         // Their median; of two middle ones the one nearer the point (a mean of two could fall
         // between two surfaces).
         for (int a = 1; a < kept; ++a) // insertion sort of at most 8 values

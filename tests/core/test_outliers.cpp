@@ -189,3 +189,57 @@ TEST(Outliers, ANoiseFreeFrameHasNone)
   const Grid g = gridOf(renderSequence(o).front().noisy);
   EXPECT_EQ(detail::findIsolatedPoints(g, profileOf(g), 10.0f, kOrigin, {}, 2).size(), 0u);
 }
+
+TEST(Outliers, TwoMixedPixelsThatAgreeOnlyWithEachOtherAreNoSurface)
+{
+  // A step edge as above; two vertically adjacent pixels of the far side's first column both 25
+  // cm in front of the far surface (two mixed pixels at the same fraction): each agrees with
+  // the other and with nothing else, and both land on a surface. A third pixel on the next row
+  // is put in line with one of them and the far point beyond it (2 rho_j - rho_j'), as mixed
+  // pixels can be by chance: no surface either.
+  Grid g = noisyPlane();
+  const int w = g.width;
+  for (int v = 0; v < g.height; ++v)
+    for (int u = 0; u < 160; ++u)
+      pushAlongRay(g, static_cast<std::size_t>(v) * w + u, -0.5f);
+  const NoiseProfile profile = profileOf(g);
+  const std::size_t upper = static_cast<std::size_t>(100) * w + 160, lower = upper + w;
+  const float far_upper = rangeOf(g, upper), far_lower = rangeOf(g, lower);
+  pushAlongRay(g, upper, -0.25f);
+  pushAlongRay(g, lower, far_upper - 0.25f - far_lower); // the same range as the upper one
+  Grid out = g;
+  EXPECT_EQ(detail::correctIsolatedPoints(out, profile, 10.0f, kOrigin, {}, 1), 2u);
+  EXPECT_NEAR(rangeOf(out, upper), far_upper, 0.02f);
+  EXPECT_NEAR(rangeOf(out, lower), far_lower, 0.02f);
+
+  // In line by chance: on row 50, the near side's last pixel (159), a mixed pixel at 160 and one at
+  // 161 with rho(161) = 2 rho(160) - rho(159).
+  Grid line = noisyPlane();
+  for (int v = 0; v < line.height; ++v)
+    for (int u = 0; u < 160; ++u)
+      pushAlongRay(line, static_cast<std::size_t>(v) * w + u, -0.5f);
+  const std::size_t a = static_cast<std::size_t>(50) * w + 159, b = a + 1, c = a + 2;
+  const float far_b = rangeOf(line, b), far_c = rangeOf(line, c);
+  pushAlongRay(line, b, -0.3f);                                           // 0.2 m behind the near surface
+  pushAlongRay(line, c, 2.0f * rangeOf(line, b) - rangeOf(line, a) - far_c); // 0.4 m behind it, in line
+  Grid out_line = line;
+  EXPECT_EQ(detail::correctIsolatedPoints(out_line, profileOf(line), 10.0f, kOrigin, {}, 1), 2u);
+  EXPECT_NEAR(rangeOf(out_line, b), far_b, 0.02f);
+  EXPECT_NEAR(rangeOf(out_line, c), far_c, 0.02f);
+}
+
+TEST(Outliers, AWireOnePixelWideIsASurface)
+{
+  // A wire half a metre in front of the noisy plane: one pixel wide, 40 pixels long, horizontal
+  // and diagonal. Each of its points agrees with the wire points beside it (its tips with one,
+  // which agrees with the next): none is an outlier.
+  Grid g = noisyPlane();
+  const int w = g.width;
+  const std::size_t diagonal_start = static_cast<std::size_t>(150) * w + 100;
+  for (int k = 0; k < 40; ++k) {
+    pushAlongRay(g, static_cast<std::size_t>(60) * w + 100 + k, -0.5f);
+    pushAlongRay(g, diagonal_start + static_cast<std::size_t>(k) * (w + 1), -0.5f);
+  }
+  Grid out = g;
+  EXPECT_EQ(detail::correctIsolatedPoints(out, profileOf(noisyPlane()), 10.0f, kOrigin, {}, 1), 0u);
+}

@@ -87,12 +87,14 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
                      const Viewpoint& viewpoint);
 
 /// Moves the isolated outliers of `grid` along their ray onto their neighbours' surface
-/// (FilterParameters::outlier_sigmas). A point is on a surface if its range is within a tolerance
-/// of a valid 8-neighbour's or of the straight continuation 2 rho_j - rho_j' of a neighbour j and
-/// the pixel j' beyond it; the tolerance is the larger of `sigmas` times the profile's sigma at its
-/// range and 3 pixel footprints (its range times the frame's median angle between adjacent rays).
-/// A point that is not, has at least two valid 8-neighbours and is farther from each of them than
-/// 4 times the median range step between the points of its 5 x 5 surroundings that are on a
+/// (FilterParameters::outlier_sigmas). A point agrees with a valid 8-neighbour j if its range is
+/// within a tolerance of j's or of the straight continuation 2 rho_j - rho_j' of j and the pixel j'
+/// beyond it; the tolerance is the larger of `sigmas` times the profile's sigma at its range and 3
+/// pixel footprints (its range times the frame's median angle between adjacent rays). It is on a
+/// surface if it agrees with two neighbours, or with one that agrees with another of its own
+/// neighbours (two points that agree only with each other are no surface). A point that is not,
+/// has at least two valid 8-neighbours and is farther from each of its neighbours on a surface
+/// than 4 times the median range step between the points of its 5 x 5 surroundings that are on a
 /// surface, gets the median range of its 8-neighbours that are on a surface (of two middle
 /// ranges, the one nearer its own; none: it stays). Such points are the mismatches of
 /// structured-light block matching and the mixed ("flying") pixels of time-of-flight cameras at
