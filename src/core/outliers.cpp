@@ -19,6 +19,8 @@ constexpr int kSide = 2 * kSurroundReach + 1;
 /// An outlier must also be farther from every neighbour than this many times the median range
 /// step between adjacent pixels of its 5 x 5 surroundings that lie on a surface.
 constexpr float kSurroundSteps = 4.0f;
+/// Reach of the surroundings that choose an outlier's side of a depth edge: 11 x 11 pixels.
+constexpr int kSideReach = 5;
 /// Smallest tolerance of "on a surface", in pixel footprints (range x the angle between adjacent
 /// rays).
 constexpr float kFootprints = 3.0f;
@@ -154,7 +156,15 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
   };
   // Rows are independent and each thread's finds are merged in row order: the result does not
   // depend on the number of threads.
-  std::vector<std::vector<IsolatedPoint>> rows(height);
+  struct Candidate
+  {
+    std::size_t index;
+    int u, v;
+    float range;
+    int kept;      // ring values
+    float ring[8]; // the 8-neighbours on a surface, ascending
+  };
+  std::vector<std::vector<Candidate>> rows(height);
 #pragma omp parallel num_threads(threads)
   {
     std::vector<float> steps;
@@ -230,18 +240,56 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
           if (std::any_of(neighbours, neighbours + kept, [&](float q) { return std::fabs(q - r) <= typical; }))
             continue;
         }
-        // Their median; of two middle ones the one nearer the point (a mean of two could fall
-        // between two surfaces).
         for (int a = 1; a < kept; ++a) // insertion sort of at most 8 values
           for (int b = a; b > 0 && neighbours[b] < neighbours[b - 1]; --b)
             std::swap(neighbours[b], neighbours[b - 1]);
-        const float low = neighbours[(kept - 1) / 2], high = neighbours[kept / 2];
-        rows[v].push_back(IsolatedPoint{i, std::fabs(low - r) <= std::fabs(high - r) ? low : high});
+        Candidate c{i, u, v, r, kept, {}};
+        std::copy(neighbours, neighbours + kept, c.ring);
+        rows[v].push_back(c);
       }
     }
   }
-  for (const std::vector<IsolatedPoint>& row : rows)
-    found.insert(found.end(), row.begin(), row.end());
+  // Where the ring's surface points lie on two sides of a depth edge (their nearest and farthest
+  // more than the tolerance apart), the side is the one most points of the wider surroundings
+  // are nearer to, outliers left out: next to a silhouette the ring holds a few pixels of each
+  // side, and which side the point's pixel belongs to shows in the edge's course around it.
+  std::vector<unsigned char> outlier(rho.size(), 0);
+  for (const std::vector<Candidate>& row : rows)
+    for (const Candidate& c : row)
+      outlier[c.index] = 1;
+  for (const std::vector<Candidate>& row : rows)
+    for (const Candidate& c : row) {
+      const float* ring = c.ring;
+      int first = 0, last = c.kept; // the ring values of the chosen side: [first, last)
+      const float low = ring[0], high = ring[c.kept - 1];
+      if (high - low > toleranceAt(low)) {
+        int nearer_low = 0, nearer_high = 0;
+        const auto usableAt = [&](int a, int b) {
+          return validAt(a, b) && !outlier[static_cast<std::size_t>(b) * width + a];
+        };
+        for (int b = -kSideReach; b <= kSideReach; ++b)
+          for (int a = -kSideReach; a <= kSideReach; ++a) {
+            // Pixels in point-symmetric pairs only: a hole on one side of the edge (a shadow)
+            // takes its mirror image on the other out too.
+            if ((a == 0 && b == 0) || !usableAt(c.u + a, c.v + b) || !usableAt(c.u - a, c.v - b))
+              continue;
+            const float q = rho[static_cast<std::size_t>(c.v + b) * width + c.u + a];
+            (std::fabs(q - low) < std::fabs(q - high) ? nearer_low : nearer_high) += 1;
+          }
+        const int split = static_cast<int>(std::upper_bound(ring, ring + c.kept, 0.5f * (low + high)) - ring);
+        if (nearer_low != nearer_high) {
+          if (nearer_low > nearer_high)
+            last = split;
+          else
+            first = split;
+        }
+      }
+      // The median of that side; of two middle ones the one nearer the point (a mean of two could
+      // fall between two surfaces).
+      const float mid_low = ring[first + (last - first - 1) / 2], mid_high = ring[first + (last - first) / 2];
+      found.push_back(IsolatedPoint{c.index, std::fabs(mid_low - c.range) <= std::fabs(mid_high - c.range) ? mid_low
+                                                                                                            : mid_high});
+    }
   return found;
 }
 

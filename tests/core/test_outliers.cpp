@@ -55,6 +55,17 @@ pushAlongRay(Grid& g, std::size_t i, float delta)
   g.x[i] *= f, g.y[i] *= f, g.z[i] *= f;
 }
 
+/// The noisy plane with a step edge: columns < 160 half a metre nearer.
+Grid
+stepEdge()
+{
+  Grid g = noisyPlane();
+  for (int v = 0; v < g.height; ++v)
+    for (int u = 0; u < 160; ++u)
+      pushAlongRay(g, static_cast<std::size_t>(v) * g.width + u, -0.5f);
+  return g;
+}
+
 NoiseProfile
 profileOf(const Grid& g)
 {
@@ -151,11 +162,8 @@ TEST(Outliers, AMixedPixelBetweenTwoSurfacesGoesToOneOfThemNotBetween)
   // A step edge in the noisy plane: columns < 160 half a metre nearer; a pixel of the far
   // side's first column moved to 5 cm behind the halfway point (a mixed pixel), its
   // 8-neighbours 3 near and 5 far.
-  Grid g = noisyPlane();
+  Grid g = stepEdge();
   const int w = g.width;
-  for (int v = 0; v < g.height; ++v)
-    for (int u = 0; u < 160; ++u)
-      pushAlongRay(g, static_cast<std::size_t>(v) * w + u, -0.5f);
   const NoiseProfile profile = profileOf(g);
   const std::size_t mixed = static_cast<std::size_t>(100) * w + 160;
   const float far = rangeOf(g, mixed);
@@ -197,11 +205,8 @@ TEST(Outliers, TwoMixedPixelsThatAgreeOnlyWithEachOtherAreNoSurface)
   // the other and with nothing else, and both land on a surface. A third pixel on the next row
   // is put in line with one of them and the far point beyond it (2 rho_j - rho_j'), as mixed
   // pixels can be by chance: no surface either.
-  Grid g = noisyPlane();
+  Grid g = stepEdge();
   const int w = g.width;
-  for (int v = 0; v < g.height; ++v)
-    for (int u = 0; u < 160; ++u)
-      pushAlongRay(g, static_cast<std::size_t>(v) * w + u, -0.5f);
   const NoiseProfile profile = profileOf(g);
   const std::size_t upper = static_cast<std::size_t>(100) * w + 160, lower = upper + w;
   const float far_upper = rangeOf(g, upper), far_lower = rangeOf(g, lower);
@@ -214,10 +219,7 @@ TEST(Outliers, TwoMixedPixelsThatAgreeOnlyWithEachOtherAreNoSurface)
 
   // In line by chance: on row 50, the near side's last pixel (159), a mixed pixel at 160 and one at
   // 161 with rho(161) = 2 rho(160) - rho(159).
-  Grid line = noisyPlane();
-  for (int v = 0; v < line.height; ++v)
-    for (int u = 0; u < 160; ++u)
-      pushAlongRay(line, static_cast<std::size_t>(v) * w + u, -0.5f);
+  Grid line = stepEdge();
   const std::size_t a = static_cast<std::size_t>(50) * w + 159, b = a + 1, c = a + 2;
   const float far_b = rangeOf(line, b), far_c = rangeOf(line, c);
   pushAlongRay(line, b, -0.3f);                                           // 0.2 m behind the near surface
@@ -242,4 +244,23 @@ TEST(Outliers, AWireOnePixelWideIsASurface)
   }
   Grid out = g;
   EXPECT_EQ(detail::correctIsolatedPoints(out, profileOf(noisyPlane()), 10.0f, kOrigin, {}, 1), 0u);
+}
+
+TEST(Outliers, AMixedPixelTakesTheSideOfTheEdgeMostOfItsSurroundingsAreOn)
+{
+  // The step edge again (columns < 160 half a metre nearer) and a mixed pixel halfway in the far
+  // side's first column, with the three pixels right of it missing: its ring holds 3 near and
+  // 2 far points, whose median is the near surface, but the 11 x 11 surroundings are mostly far
+  // (the edge runs straight past the pixel, which is on the far side of it).
+  Grid g = stepEdge();
+  const int w = g.width;
+  const NoiseProfile profile = profileOf(g);
+  const std::size_t mixed = static_cast<std::size_t>(100) * w + 160;
+  const float far = rangeOf(g, mixed);
+  pushAlongRay(g, mixed, -0.25f);
+  for (std::size_t j : {mixed - w + 1, mixed + 1, mixed + w + 1})
+    g.valid[j] = 0;
+  Grid out = g;
+  EXPECT_EQ(detail::correctIsolatedPoints(out, profile, 10.0f, kOrigin, {}, 1), 1u);
+  EXPECT_NEAR(rangeOf(out, mixed), far, 0.02f);
 }

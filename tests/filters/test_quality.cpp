@@ -317,13 +317,13 @@ TEST(Quality, StructuredLightMismatchesAndFlyingPixelsAreMovedOntoASurface)
   print("kinect1 outliers left", s_off);
   print("tof default", t_def);
   print("tof outliers left", t_off);
-  // Measured: kinect1 1.149 / 2.403 mm against 1.149 / 6.010 mm; tof 0.482 / 77.07 mm against
+  // Measured: kinect1 1.149 / 2.403 mm against 1.149 / 6.010 mm; tof 0.482 / 63.44 mm against
   // 0.480 / 151.62 mm (85.12 mm while pairs of mixed pixels that agreed with each other counted
-  // as a surface).
+  // as a surface, 77.07 mm while the ring's median chose the side of the edge).
   EXPECT_LT(s_def.feature_rmse, 3.0e-3);
   EXPECT_LT(s_def.feature_rmse, 0.5 * s_off.feature_rmse);
   EXPECT_LT(s_def.flat_rmse, 1.01 * s_off.flat_rmse);
-  EXPECT_LT(t_def.feature_rmse, 0.53 * t_off.feature_rmse);
+  EXPECT_LT(t_def.feature_rmse, 0.46 * t_off.feature_rmse);
   EXPECT_LT(t_def.flat_rmse, 1.01 * t_off.flat_rmse);
   EXPECT_EQ(s_def.points_lost, 0u);
   EXPECT_EQ(t_def.points_lost, 0u);

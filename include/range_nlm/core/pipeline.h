@@ -96,7 +96,9 @@ estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint
 /// has at least two valid 8-neighbours and is farther from each of its neighbours on a surface
 /// than 4 times the median range step between the points of its 5 x 5 surroundings that are on a
 /// surface, gets the median range of its 8-neighbours that are on a surface (of two middle
-/// ranges, the one nearer its own; none: it stays). Such points are the mismatches of
+/// ranges, the one nearer its own; none: it stays); where those lie on both sides of a depth edge,
+/// of the side that most points of its 11 x 11 surroundings are nearer to (counted in
+/// point-symmetric pairs of valid points that are no outliers). Such points are the mismatches of
 /// structured-light block matching and the mixed ("flying") pixels of time-of-flight cameras at
 /// depth edges: no patch resembles theirs, so the non-local filter leaves them where they are.
 /// Returns the number of points moved; nothing with `sigmas` <= 0 or an empty profile.
