@@ -16,8 +16,8 @@ namespace
 /// Adjacent pairs (right and down neighbours) of the 5 x 5 window around a pixel.
 constexpr int kSurroundReach = 2;
 constexpr int kSide = 2 * kSurroundReach + 1;
-/// An outlier must also be farther from every neighbour than this many times the median range
-/// step between adjacent pixels of its 5 x 5 surroundings that lie on a surface.
+/// An outlier must also be farther from every neighbour on a surface than this many times the
+/// median range step between adjacent pixels of its 5 x 5 surroundings that lie on a surface.
 constexpr float kSurroundSteps = 4.0f;
 /// Reach of the surroundings that choose an outlier's side of a depth edge: 11 x 11 pixels.
 constexpr int kSideReach = 5;
@@ -161,8 +161,8 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
     std::size_t index;
     int u, v;
     float range;
-    int kept;      // ring values
-    float ring[8]; // the 8-neighbours on a surface, ascending
+    int kept;      // how many of ring[] are set
+    float ring[8]; // the ranges of its 8-neighbours on a surface, ascending
   };
   std::vector<std::vector<Candidate>> rows(height);
 #pragma omp parallel num_threads(threads)
