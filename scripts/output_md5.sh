@@ -61,7 +61,7 @@ while IFS= read -r dir; do
   intrinsics=$dir/intrinsics.txt
   [[ -f $intrinsics ]] || intrinsics=$(dirname "$dir")/intrinsics.txt
   mkdir -p "$work/in-$name"
-  find "$dir" -maxdepth 1 -name '*.png' ! -name 'ir_*' -exec cp {} "$work/in-$name/" \;
+  find "$dir/" -maxdepth 1 -name '*.png' ! -name 'ir_*' -exec cp {} "$work/in-$name/" \;
   for mode in "static-png" "static-pcd --output-format pcd" "temporal1-png --temporal-radius 1"; do
     read -r label extra <<<"$mode"
     # shellcheck disable=SC2086
