@@ -436,12 +436,18 @@ automaticDilation(const Grid& frame)
 int
 detail::automaticDilation(const Grid& frame, int threads)
 {
-  const int lag = std::clamp((8 * frame.width + 320) / 640, 2, 8);
-  const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, 4, threads);
+  const int width = tuned::kDilationReferenceWidth, rounding = tuned::kDilationReferenceWidth / 2;
+  const int lag =
+      std::clamp((tuned::kDilationReferenceLag * frame.width + rounding) / width, tuned::kDilationMinLag,
+                 tuned::kDilationMaxLag);
+  const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, tuned::kDilationCorrelationStep, threads);
   const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
-  const int k = far > 0.0f && near < 0.5f * far ? std::clamp((2 * frame.width + 320) / 640, 2, 4) : 1;
-  // Strong noise: more than 3.25 pixel footprints at half the reference lag.
-  return c.scale_in_footprints[lag / 2 - 1] > 3.25f ? 2 * k : k;
+  const int k = far > 0.0f && near < tuned::kCorrelatedVarianceRatio * far
+                    ? std::clamp((tuned::kDilationPerWidth * frame.width + rounding) / width, tuned::kDilationMin,
+                                 tuned::kDilationMax)
+                    : 1;
+  // Strong noise: more than kStrongNoiseFootprints pixel footprints at half the reference lag.
+  return c.scale_in_footprints[lag / 2 - 1] > tuned::kStrongNoiseFootprints ? 2 * k : k;
 }
 
 void
@@ -786,7 +792,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     for (int k = 0; k < count; ++k)
       neighbours += usable[k] && k != center ? 1 : 0;
     // Built only where it can be used (kGuideMinFrames): radius 1 does no work for it.
-    const bool may_guide = parameters.patch_guide && neighbours >= detail::kGuideMinFrames;
+    const bool may_guide = parameters.patch_guide && neighbours >= tuned::kGuideMinFrames;
     for (int k = 0; k < count; ++k) {
       if (!usable[k])
         continue;
@@ -866,10 +872,10 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
                 guide_weight.assign(n, 1.0f);
               }
               std::vector<unsigned char>& widened = workspace.widened;
-              detail::widenMask(changed, current.width, current.height, detail::kGuideMargin, threads, widened);
+              detail::widenMask(changed, current.width, current.height, tuned::kGuideMargin, threads, widened);
               const float w = std::min(1.0f, (s_c / s_k) * (s_c / s_k));
               const Grid& other = *frames[k];
-              const float limit = detail::kGuideTolerance * detail::kChangeSigmas * 1.41421356f * ratio;
+              const float limit = tuned::kGuideTolerance * tuned::kChangeSigmas * 1.41421356f * ratio;
               const float* __restrict sigma_c = workspace.profile_sigma.data();
               const float* __restrict difference = along.data();
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -901,7 +907,7 @@ runContiguous(const std::vector<const Grid*>& frames, int center, const FilterPa
     }
     // With fewer neighbours in it, each would find a large share of its own noise in the guide
     // and its candidates would lean towards that instead (kGuideMinFrames).
-    if (guide_frames >= detail::kGuideMinFrames) {
+    if (guide_frames >= tuned::kGuideMinFrames) {
       const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
       for (std::ptrdiff_t i = 0; i < size; ++i) {
