@@ -113,7 +113,9 @@ rangeNlmVariants(bool include_levers)
   p.outlier_sigmas = 10.0f;
   v.emplace_back("  + isolated outliers moved onto their neighbours' surface", p);
   p.patch_edge_gate = 18.0f;
-  v.emplace_back("  + gated patches (= default)", p);
+  v.emplace_back("  + gated patches", p);
+  // The last lever row is the default itself, so that it cannot drift from it.
+  v.emplace_back("  + automatic displacement, patch guide (= default)", FilterParameters::recommended());
   FilterParameters q = FilterParameters::recommended();
   q.displacement = Displacement::line_of_sight;
   v.emplace_back("default + line of sight", q);

@@ -482,43 +482,24 @@ viewpointOf(const Cloud& cloud)
   return Viewpoint{cloud.sensor_origin_[0], cloud.sensor_origin_[1], cloud.sensor_origin_[2]};
 }
 
-/// Sums the time of each phase over one runFilter call.
+/// Sums the time of each phase over one runFilter call, and lists the phases in the order they
+/// first began: the phases that runFilter went through with its parameters and frames.
 class StageTimer : public StageObserver
 {
 public:
-  void begin(Stage, int) override { start_ = std::chrono::steady_clock::now(); }
+  void begin(Stage stage, int) override
+  {
+    if (std::find(order.begin(), order.end(), stage) == order.end())
+      order.push_back(stage);
+    start_ = std::chrono::steady_clock::now();
+  }
   void end(Stage stage, int) override { ms[static_cast<int>(stage)] += millisecondsSince(start_); }
   std::array<double, kStageCount> ms{};
+  std::vector<Stage> order;
 
 private:
   std::chrono::steady_clock::time_point start_;
 };
-
-/// The phases runFilter goes through with `p`, in order, each once (in the global model the
-/// normals phase is the raw fit before the bandwidths plus the gated fit after the pre-smoothing).
-std::vector<Stage>
-stagesOf(const FilterParameters& p, bool temporal)
-{
-  const bool adaptive = p.bandwidth_model == BandwidthModel::range_adaptive;
-  std::vector<Stage> stages;
-  if (p.outlier_sigmas > 0.0f)
-    stages.push_back(Stage::outliers);
-  if (p.dilation != 1)
-    stages.push_back(Stage::dilation);
-  if (temporal)
-    stages.push_back(Stage::neighbour_frames);
-  if (!adaptive)
-    stages.push_back(Stage::normals);
-  stages.push_back(Stage::bandwidths);
-  stages.push_back(Stage::noise_maps);
-  if (p.normal_presmooth_window > 1)
-    stages.push_back(Stage::presmoothing);
-  if (adaptive)
-    stages.push_back(Stage::normals);
-  for (Stage stage : {Stage::frame_terms, Stage::offsets, Stage::displacement})
-    stages.push_back(stage);
-  return stages;
-}
 
 /// A readable label of a phase with the parameters that set its cost.
 std::string
@@ -549,27 +530,66 @@ stageLabel(Stage stage, const FilterParameters& p, std::size_t frames)
   }
 }
 
+/// Setup phases run once per filter() call; the others once per iteration.
+bool
+oncePerCall(Stage stage)
+{
+  return stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation;
+}
+
+/// The breakdown's steps: the conversion, the phases runFilter went through (`stages`, in the
+/// order they first began), the direct evaluation if timed, and filter() end to end.
+std::vector<Step>
+breakdownSteps(const std::vector<Stage>& stages, const FilterParameters& p, std::size_t count, bool with_direct)
+{
+  const bool temporal = count > 1;
+  std::vector<Step> steps;
+  steps.push_back({"cloud -> Grid (detail::toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
+                   false, true, false});
+  for (Stage stage : stages)
+    steps.push_back({stageLabel(stage, p, count), !oncePerCall(stage), true, false});
+  if (with_direct)
+    steps.push_back({"offsets direct " + std::to_string(p.search_window) + "x" + std::to_string(p.search_window) +
+                         "/" + std::to_string(p.patch_size) + "x" + std::to_string(p.patch_size),
+                     true, false, false});
+  steps.push_back({std::string(temporal ? "TemporalNonLocalMeansFilter" : "NonLocalMeansFilter") +
+                       "::filter() fast, end to end, " + std::to_string(p.iterations) + " iteration(s)",
+                   false, false, true});
+  return steps;
+}
+
+/// The child's result of benchBreakdown: the number m of phases, the m phases (Stage values) in
+/// the order they first began, then the median of every step.
+void
+decodeBreakdown(const FilterParameters& p, std::size_t count, bool with_direct, Breakdown& b)
+{
+  const std::vector<double>& values = b.result.values;
+  const std::size_t m = values.empty() ? 0 : static_cast<std::size_t>(values[0]);
+  if (values.empty() || values.size() < 1 + m) {
+    b.result.ok = false;
+    b.result.error = "incomplete breakdown result";
+    return;
+  }
+  std::vector<Stage> stages;
+  for (std::size_t i = 1; i <= m; ++i)
+    stages.push_back(static_cast<Stage>(static_cast<int>(values[i])));
+  b.steps = breakdownSteps(stages, p, count, with_direct);
+  if (values.size() != 1 + m + b.steps.size()) {
+    b.result.ok = false;
+    b.result.error = "incomplete breakdown result";
+    return;
+  }
+  b.median_ms.assign(values.begin() + static_cast<std::ptrdiff_t>(1 + m), values.end());
+}
+
 Breakdown
 benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& p, bool with_direct)
 {
   const std::size_t count = frames.clouds.size(), c = frames.center;
   const bool temporal = count > 1;
-  const std::vector<Stage> stages = stagesOf(p, temporal);
   Breakdown b;
   b.config = frames.label;
   b.iterations = p.iterations;
-  b.steps.push_back({"cloud -> Grid (detail::toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
-                     false, true, false});
-  for (Stage stage : stages)
-    b.steps.push_back({stageLabel(stage, p, count), stage != Stage::outliers && stage != Stage::neighbour_frames && stage != Stage::dilation,
-                       true, false});
-  if (with_direct)
-    b.steps.push_back({"offsets direct " + std::to_string(p.search_window) + "x" + std::to_string(p.search_window) +
-                           "/" + std::to_string(p.patch_size) + "x" + std::to_string(p.patch_size),
-                       true, false, false});
-  b.steps.push_back({std::string(temporal ? "TemporalNonLocalMeansFilter" : "NonLocalMeansFilter") +
-                         "::filter() fast, end to end, " + std::to_string(p.iterations) + " iteration(s)",
-                     false, false, true});
   progress(s, "breakdown [" + frames.label + "], warm-up + " + std::to_string(s.runs) + " round(s)");
   b.result = bench::runInChild([&] {
     const Viewpoint viewpoint = viewpointOf(*frames.clouds[c]);
@@ -583,9 +603,11 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
     Workspace workspace, direct_workspace;
     const std::function<void()> filter =
         temporal ? prepareTemporal(frames, fast)() : prepareStatic(frames.clouds[c], fast)();
-    // Every round runs all phases in pipeline order, so a change of machine load hits every
-    // phase alike instead of whichever phase happened to be timed at the time.
-    std::vector<std::vector<double>> samples(b.steps.size());
+    // The phases as the warm-up round's run reports them, so the breakdown cannot drift from
+    // the pipeline. Every round runs all phases in pipeline order, so a change of machine load
+    // hits every phase alike instead of whichever phase happened to be timed at the time.
+    std::vector<Stage> stages;
+    std::vector<std::vector<double>> samples;
     for (int round = -1; round < s.runs; ++round) { // round -1 is the warm-up
       std::vector<double> ms;
       auto start = std::chrono::steady_clock::now();
@@ -595,11 +617,11 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
       StageTimer timer;
       workspace.observer = &timer;
       runFilter(pointers, static_cast<int>(c), fast, viewpoint, {}, workspace);
+      if (round < 0)
+        stages = timer.order;
       for (Stage stage : stages) {
         const double total = timer.ms[static_cast<int>(stage)];
-        ms.push_back(stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation
-                       ? total
-                       : total / p.iterations);
+        ms.push_back(oncePerCall(stage) ? total : total / p.iterations);
       }
       if (with_direct) {
         StageTimer direct_timer;
@@ -610,21 +632,20 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
       start = std::chrono::steady_clock::now();
       filter();
       ms.push_back(millisecondsSince(start));
+      samples.resize(ms.size());
       if (round >= 0)
-        for (std::size_t i = 0; i < ms.size() && i < samples.size(); ++i)
+        for (std::size_t i = 0; i < ms.size(); ++i)
           samples[i].push_back(ms[i]);
     }
-    std::vector<double> medians;
+    std::vector<double> result{static_cast<double>(stages.size())};
+    for (Stage stage : stages)
+      result.push_back(static_cast<int>(stage));
     for (const std::vector<double>& sample : samples)
-      medians.push_back(bench::median(sample));
-    return medians;
+      result.push_back(bench::median(sample));
+    return result;
   });
-  if (b.result.ok && b.result.values.size() == b.steps.size())
-    b.median_ms = b.result.values;
-  else if (b.result.ok) {
-    b.result.ok = false;
-    b.result.error = "incomplete breakdown result";
-  }
+  if (b.result.ok)
+    decodeBreakdown(p, count, with_direct, b);
   if (!b.result.ok)
     progress(s, "  breakdown failed: " + b.result.error);
   return b;

@@ -1,6 +1,8 @@
 // Internals of the core shared by its translation units and by the tests (not installed).
 #pragma once
 
+#include "tuned.h"
+
 #include <range_nlm/core/pipeline.h>
 
 #include <vector>
@@ -114,7 +116,7 @@ compareAlong(const std::vector<float>& along, int width, int height, const float
 /// range of a's point, ratio the frame-to-frame noise ratio of b), else 0; `changed` is resized
 /// to along.size() (all 0 if that is not width x height). By `threads` threads, the same for any
 /// count.
-constexpr float kChangeSigmas = 3.0f;
+using tuned::kChangeSigmas;
 void
 markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma_a,
                   const float* sigma_b, float ratio, int threads, std::vector<unsigned char>& changed);
@@ -125,26 +127,6 @@ markChangedPixels(const std::vector<float>& along, int width, int height, const 
 void
 widenMask(const std::vector<unsigned char>& mask, int width, int height, int radius, int threads,
           std::vector<unsigned char>& out);
-/// Margin of the patch guide: a frame's points stay out of the guide within this many pixels of
-/// a pixel the per-pixel test of change marked (the 3 x 3 vote lets the border of a moved
-/// object pass where fewer than half its pixels changed; measured: without the margin a moving
-/// box's edges take the old position, 1.16 mm against 0.97 per frame on the kinect1 sequence).
-constexpr int kGuideMargin = 2;
-/// The patch guide takes a neighbour's point only if its own difference along the normal is
-/// within this many times the per-pixel test's threshold (the 3 x 3 vote lets a lone changed
-/// pixel pass; measured: at a moving `stereo` box's leading edge in the dilated passes, points
-/// pulled up to 1 m toward the old background). 2: at 1, `tof` at radius 2 loses a
-/// third of the guide's gain (0.331 against 0.321 mm), while 2 and 3 measure the same.
-constexpr float kGuideTolerance = 2.0f;
-/// The patch guide is used when at least this many neighbours enter it (radius 2 and more).
-/// Each neighbour's own points are a share of the guide, 1 / (m + 1) of it with m neighbours
-/// of the current frame's noise; with one or two that share makes its candidates lean towards
-/// its own noise as they leaned towards the current frame's. Measured with m = 2 (radius 1):
-/// D435 pose4 surfaces 1.91 mm from their refitted planes against 1.73 without the guide (last
-/// frame, window [1, 2]: m = 1), the generated moving box (`kinect`, 8 frames) flat RMSE 0.74
-/// against 0.70 mm; each frame compared with the guide without its own points instead, the
-/// `kinect1` moving edges 0.98 mm against 0.91 without the guide and 0.97 per frame.
-constexpr int kGuideMinFrames = 3;
 /// The same vote with the threshold sigmas x sigma[i] (sigma the noise of the difference itself).
 void
 markChangedPixels(const std::vector<float>& along, int width, int height, const float* sigma, float sigmas,

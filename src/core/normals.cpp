@@ -64,53 +64,94 @@ struct PaddedGrid
       rho = base + 4 * n;
     (void)threads;
 #pragma omp parallel for num_threads(threads) schedule(static)
-    for (int pv = 0; pv < rows; ++pv) {
-      float* __restrict px = &x[static_cast<std::size_t>(pv) * stride];
-      float* __restrict py = &y[static_cast<std::size_t>(pv) * stride];
-      float* __restrict pz = &z[static_cast<std::size_t>(pv) * stride];
-      float* __restrict pf = &f[static_cast<std::size_t>(pv) * stride];
-      const int v = pv - r;
-      const bool inside = v >= 0 && v < g.height;
-      // Border rows and columns are 0.
-      const int width = g.width;
-      const int left = inside ? r : stride; // zero [0, left) and [right, stride)
-      const int right = inside ? r + width : stride;
-      for (int pu = 0; pu < left; ++pu)
-        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
-      for (int pu = right; pu < stride; ++pu)
-        px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
-      if (inside) {
-        // Interior (invalid points hold NaN, replaced by 0), branch-free with bit masks: the
-        // compiler turns a select on `valid` into a branch per point.
-        const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
-        const Bits* __restrict gx = reinterpret_cast<const Bits*>(&g.x[i0]);
-        const Bits* __restrict gy = reinterpret_cast<const Bits*>(&g.y[i0]);
-        const Bits* __restrict gz = reinterpret_cast<const Bits*>(&g.z[i0]);
-        const unsigned char* __restrict gv = &g.valid[i0];
-        Bits* __restrict bx = reinterpret_cast<Bits*>(px + r);
-        Bits* __restrict by = reinterpret_cast<Bits*>(py + r);
-        Bits* __restrict bz = reinterpret_cast<Bits*>(pz + r);
-        Bits* __restrict bf = reinterpret_cast<Bits*>(pf + r);
-#pragma omp simd
-        for (int u = 0; u < width; ++u) {
-          const std::uint32_t keep = 0u - static_cast<std::uint32_t>(gv[u] != 0);
-          bx[u] = gx[u] & keep, by[u] = gy[u] & keep, bz[u] = gz[u] & keep;
-          bf[u] = 0x3f800000u & keep; // 1.0f
-        }
-      }
-      if (!ranges)
-        continue;
-      float* __restrict pr = &rho[static_cast<std::size_t>(pv) * stride];
-      const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
-#pragma omp simd
-      for (int pu = 0; pu < stride; ++pu) {
-        const float dx = px[pu] - vx, dy = py[pu] - vy, dz = pz[pu] - vz;
-        pr[pu] = pf[pu] > 0.0f ? std::sqrt(dx * dx + dy * dy + dz * dz) : 0.0f;
-      }
-    }
+    for (int pv = 0; pv < rows; ++pv)
+      fillRow(g, pv, viewpoint);
   }
   std::size_t at(int u, int v) const { return static_cast<std::size_t>(v + border) * stride + (u + border); }
+
+private:
+  /// Padded row pv: border columns 0, the interior copied (invalid points hold NaN, replaced by
+  /// 0) and flagged, and the ranges if kept.
+  void fillRow(const Grid& g, int pv, const Viewpoint& viewpoint)
+  {
+    const int r = border;
+    float* __restrict px = &x[static_cast<std::size_t>(pv) * stride];
+    float* __restrict py = &y[static_cast<std::size_t>(pv) * stride];
+    float* __restrict pz = &z[static_cast<std::size_t>(pv) * stride];
+    float* __restrict pf = &f[static_cast<std::size_t>(pv) * stride];
+    const int v = pv - r;
+    const bool inside = v >= 0 && v < g.height;
+    // Border rows and columns are 0.
+    const int width = g.width;
+    const int left = inside ? r : stride; // zero [0, left) and [right, stride)
+    const int right = inside ? r + width : stride;
+    for (int pu = 0; pu < left; ++pu)
+      px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
+    for (int pu = right; pu < stride; ++pu)
+      px[pu] = 0.0f, py[pu] = 0.0f, pz[pu] = 0.0f, pf[pu] = 0.0f;
+    if (inside) {
+      // Branch-free with bit masks: the compiler turns a select on `valid` into a branch per
+      // point.
+      const std::size_t i0 = static_cast<std::size_t>(v) * g.width;
+      const Bits* __restrict gx = reinterpret_cast<const Bits*>(&g.x[i0]);
+      const Bits* __restrict gy = reinterpret_cast<const Bits*>(&g.y[i0]);
+      const Bits* __restrict gz = reinterpret_cast<const Bits*>(&g.z[i0]);
+      const unsigned char* __restrict gv = &g.valid[i0];
+      Bits* __restrict bx = reinterpret_cast<Bits*>(px + r);
+      Bits* __restrict by = reinterpret_cast<Bits*>(py + r);
+      Bits* __restrict bz = reinterpret_cast<Bits*>(pz + r);
+      Bits* __restrict bf = reinterpret_cast<Bits*>(pf + r);
+#pragma omp simd
+      for (int u = 0; u < width; ++u) {
+        const std::uint32_t keep = 0u - static_cast<std::uint32_t>(gv[u] != 0);
+        bx[u] = gx[u] & keep, by[u] = gy[u] & keep, bz[u] = gz[u] & keep;
+        bf[u] = 0x3f800000u & keep; // 1.0f
+      }
+    }
+    if (!rho)
+      return;
+    float* __restrict pr = &rho[static_cast<std::size_t>(pv) * stride];
+    const float vx = viewpoint[0], vy = viewpoint[1], vz = viewpoint[2];
+#pragma omp simd
+    for (int pu = 0; pu < stride; ++pu) {
+      const float dx = px[pu] - vx, dy = py[pu] - vy, dz = pz[pu] - vz;
+      pr[pu] = pf[pu] > 0.0f ? std::sqrt(dx * dx + dy * dy + dz * dz) : 0.0f;
+    }
+  }
 };
+
+/// One row's gates for the gated fits: g = gate where valid, else 1e30. Branch-free with bit
+/// masks, so that it vectorizes.
+inline void
+rowGate(const float* gate, const unsigned char* __restrict valid, int width, float* g)
+{
+  const Bits* __restrict gv = reinterpret_cast<const Bits*>(gate);
+  Bits* __restrict gb = reinterpret_cast<Bits*>(g);
+  const Bits far = 0x7149f2cau; // 1e30f
+#pragma omp simd
+  for (int u = 0; u < width; ++u) {
+    const std::uint32_t keep = 0u - static_cast<std::uint32_t>(valid[u] != 0);
+    gb[u] = (gv[u] & keep) | (far & ~keep);
+  }
+}
+
+/// One row of pass 1's normals for the plane gate of pass 2: n0 = the normal where finite, else
+/// 0. Branch-free with bit masks, so that it vectorizes.
+inline void
+rowFirstNormals(const NormalField& first, std::size_t row, int width, float* n0x, float* n0y, float* n0z)
+{
+  const Bits* __restrict fx = reinterpret_cast<const Bits*>(&first.nx[row]);
+  const Bits* __restrict fy = reinterpret_cast<const Bits*>(&first.ny[row]);
+  const Bits* __restrict fz = reinterpret_cast<const Bits*>(&first.nz[row]);
+  Bits* __restrict bx = reinterpret_cast<Bits*>(n0x);
+  Bits* __restrict by = reinterpret_cast<Bits*>(n0y);
+  Bits* __restrict bz = reinterpret_cast<Bits*>(n0z);
+#pragma omp simd
+  for (int u = 0; u < width; ++u) {
+    const std::uint32_t finite = 0u - static_cast<std::uint32_t>((fx[u] & 0x7f800000u) != 0x7f800000u);
+    bx[u] = fx[u] & finite, by[u] = fy[u] & finite, bz[u] = fz[u] & finite;
+  }
+}
 
 /// One pass of estimateNormalsGated over an already padded grid; `first` is pass 1's result
 /// (pass 2 only).
@@ -138,32 +179,10 @@ fitNormals(const Grid& grid, const PaddedGrid& pad, int window, const Viewpoint&
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < height; ++v) {
       const std::size_t row = static_cast<std::size_t>(v) * width;
-      if (range_gated || plane_gated) {
-        // g = gate where valid, else 1e30; n0 = pass 1's normal where finite, else 0 (pass 2
-        // only). Branch-free with bit masks, so that it vectorizes.
-        const Bits* __restrict gv = reinterpret_cast<const Bits*>(&gate[row]);
-        const unsigned char* __restrict valid = &grid.valid[row];
-        Bits* __restrict gb = reinterpret_cast<Bits*>(g.data());
-        const Bits far = 0x7149f2cau; // 1e30f
-#pragma omp simd
-        for (int u = 0; u < width; ++u) {
-          const std::uint32_t keep = 0u - static_cast<std::uint32_t>(valid[u] != 0);
-          gb[u] = (gv[u] & keep) | (far & ~keep);
-        }
-        if (plane_gated) {
-          const Bits* __restrict fx = reinterpret_cast<const Bits*>(&first->nx[row]);
-          const Bits* __restrict fy = reinterpret_cast<const Bits*>(&first->ny[row]);
-          const Bits* __restrict fz = reinterpret_cast<const Bits*>(&first->nz[row]);
-          Bits* __restrict bx = reinterpret_cast<Bits*>(n0x.data());
-          Bits* __restrict by = reinterpret_cast<Bits*>(n0y.data());
-          Bits* __restrict bz = reinterpret_cast<Bits*>(n0z.data());
-#pragma omp simd
-          for (int u = 0; u < width; ++u) {
-            const std::uint32_t finite = 0u - static_cast<std::uint32_t>((fx[u] & 0x7f800000u) != 0x7f800000u);
-            bx[u] = fx[u] & finite, by[u] = fy[u] & finite, bz[u] = fz[u] & finite;
-          }
-        }
-      }
+      if (range_gated || plane_gated)
+        rowGate(&gate[row], &grid.valid[row], width, g.data());
+      if (plane_gated)
+        rowFirstNormals(*first, row, width, n0x.data(), n0y.data(), n0z.data());
       // All (2r+1)^2 offsets in one call, in the order the row kernel `moments` would take them,
       // with the sums of each block of centres kept in registers (plane_fit.inc).
       const std::size_t c0 = pad.at(0, v);

@@ -17,7 +17,35 @@
 // X(name, type, value, fitted_on, why)
 
 /// Numbers of the pipeline's stages (src/core/pipeline*.cpp, stages/): dilation, passes, guide.
-#define RANGE_NLM_TUNED_PIPELINE(X)
+#define RANGE_NLM_TUNED_PIPELINE(X)                                                                                   \
+  X(kDilationReferenceWidth, int, 640, "derived",                                                                     \
+    "the width (VGA) the automatic dilation's per-width numbers are given for, rounded to nearest")                   \
+  X(kDilationReferenceLag, int, 8, "generated",                                                                       \
+    "reference lag R per reference width: beyond the correlation length of the stereo noise")                         \
+  X(kDilationMinLag, int, 2, "derived",                                                                               \
+    "smallest reference lag: R / 2 must be a lag of its own")                                                         \
+  X(kDilationMaxLag, int, 8, "derived",                                                                               \
+    "largest reference lag: estimateNoiseCorrelation measures lags 1 .. 8")                                           \
+  X(kDilationPerWidth, int, 2, "generated",                                                                           \
+    "dilation of correlated noise per reference width: a dilated patch stays small")                                  \
+  X(kDilationMin, int, 2, "derived",                                                                                  \
+    "smallest dilation of correlated noise: 1 would be no dilation")                                                  \
+  X(kDilationMax, int, 4, "generated",                                                                                \
+    "largest dilation of correlated noise: a dilated 3 x 3 patch spans 9 pixels")                                     \
+  X(kDilationCorrelationStep, int, 4, "derived",                                                                      \
+    "noise correlation from every 4th row and column: enough triples, a fraction of the cost")                        \
+  X(kCorrelatedVarianceRatio, float, 0.5f, "generated",                                                               \
+    "correlated noise: the variance at lag 1 below this share of that at lag R")                                      \
+  X(kStrongNoiseFootprints, float, 3.25f, "real",                                                                     \
+    "strong noise (doubles the dilation): between the noisiest real frame and the gaining scenes")                    \
+  X(kChangeSigmas, float, 3.0f, "real",                                                                               \
+    "test of change: a difference beyond this many sigmas of two samples is a change")                                \
+  X(kGuideMargin, int, 2, "generated",                                                                                \
+    "patch guide: pixels this near a changed one stay out (the vote passes a moved border)")                          \
+  X(kGuideTolerance, float, 2.0f, "generated",                                                                        \
+    "patch guide: a point's own difference within this many test thresholds (a lone change)")                         \
+  X(kGuideMinFrames, int, 3, "real",                                                                                  \
+    "patch guide from this many neighbours on: with fewer each finds its own noise in it")
 
 /// Numbers of the frame estimates (noise profile, noise correlation, frame change, history) and
 /// of the isolated-outlier step.

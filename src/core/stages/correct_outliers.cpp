@@ -1,0 +1,32 @@
+// Stage::outliers: the current frame's isolated outliers moved onto their neighbours' surface.
+#include "stages.h"
+
+namespace range_nlm
+{
+
+const Grid*
+detail::correctOutliersStage(const Grid& input, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                             const std::vector<unsigned char>& active, Workspace& workspace)
+{
+  const int threads = resolveThreads(parameters.threads);
+  NoiseProfile profile;
+  try {
+    profile = estimateNoiseProfile(input, parameters.search_window, parameters.bandwidth_samples, parameters.seed,
+                                   viewpoint, threads);
+  } catch (const UnfilterableFrame&) {
+    // Too few points for a noise estimate: nothing to test against (runContiguous reports it).
+  }
+  const bool sized = active.empty() || active.size() == input.size(); // runContiguous reports a mismatch
+  if (profile.empty() || !sized)
+    return &input;
+  const std::vector<IsolatedPoint> found =
+      findIsolatedPoints(input, profile, parameters.outlier_sigmas, viewpoint, active, threads);
+  if (found.empty())
+    return &input;
+  copyGrid(input, workspace.corrected, threads);
+  moveIsolatedPoints(workspace.corrected, found, viewpoint);
+  workspace.run.outliers_moved = found.size();
+  return &workspace.corrected;
+}
+
+} // namespace range_nlm

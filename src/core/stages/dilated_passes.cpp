@@ -1,0 +1,182 @@
+// Stage::dilation: the automatic dilation, the split of the frames into their k^2 phases, the
+// contiguous run on each phase and the merge of their results.
+#include "stages.h"
+
+#include "../tuned.h"
+
+#include <algorithm>
+
+namespace range_nlm
+{
+namespace detail
+{
+namespace
+{
+
+/// The pixels (u0 + a k, v0 + b k) of a grid-sized array as an array of their own.
+template <typename T>
+void
+subsample(const std::vector<T>& from, int width, int height, int k, int u0, int v0, std::vector<T>& to, int threads)
+{
+  const int w = (width - u0 + k - 1) / k, h = (height - v0 + k - 1) / k;
+  to.resize(static_cast<std::size_t>(w) * h);
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int b = 0; b < h; ++b)
+    for (int a = 0; a < w; ++a)
+      to[static_cast<std::size_t>(b) * w + a] = from[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k];
+}
+
+void
+subsample(const Grid& from, int k, int u0, int v0, Grid& to, int threads)
+{
+  to.width = (from.width - u0 + k - 1) / k;
+  to.height = (from.height - v0 + k - 1) / k;
+  subsample(from.x, from.width, from.height, k, u0, v0, to.x, threads);
+  subsample(from.y, from.width, from.height, k, u0, v0, to.y, threads);
+  subsample(from.z, from.width, from.height, k, u0, v0, to.z, threads);
+  subsample(from.valid, from.width, from.height, k, u0, v0, to.valid, threads);
+}
+
+/// The filtered points of phase (u0, v0) back to their pixels of `result` (the full frame).
+void
+mergePhase(const Grid& out, int k, int u0, int v0, Grid& result, int threads)
+{
+  const int width = result.width;
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int b = 0; b < out.height; ++b)
+    for (int a = 0; a < out.width; ++a) {
+      const std::size_t from = static_cast<std::size_t>(b) * out.width + a;
+      const std::size_t to = static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k;
+      result.x[to] = out.x[from];
+      result.y[to] = out.y[from];
+      result.z[to] = out.z[from];
+    }
+}
+
+/// Every frame is there and has the size of the current one.
+bool
+sameSize(const std::vector<const Grid*>& frames, const Grid& input)
+{
+  for (const Grid* g : frames)
+    if (!g || g->width != input.width || g->height != input.height)
+      return false;
+  return true;
+}
+
+/// The run's result from the merged phases: with one iteration the merged frame itself, else a
+/// last pass with contiguous windows on the full frame.
+void
+finishDilatedPasses(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                    const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
+{
+  Workspace& phase = workspace.phase.front();
+  if (parameters.iterations <= 1) {
+    std::swap(workspace.run.output, workspace.merged);
+    workspace.run.bandwidths = phase.run.bandwidths;
+    workspace.run.frame_weights = phase.run.frame_weights;
+    return;
+  }
+  FilterParameters fine = parameters;
+  fine.dilation = 1;
+  fine.iterations = 1;
+  std::vector<const Grid*> last = frames;
+  last[center] = &workspace.merged;
+  runContiguous(last, center, fine, viewpoint, active, workspace);
+}
+
+} // namespace
+} // namespace detail
+
+int
+automaticDilation(const Grid& frame)
+{
+  return detail::automaticDilation(frame, 1);
+}
+
+int
+detail::automaticDilation(const Grid& frame, int threads)
+{
+  const int width = tuned::kDilationReferenceWidth, rounding = tuned::kDilationReferenceWidth / 2;
+  const int lag =
+      std::clamp((tuned::kDilationReferenceLag * frame.width + rounding) / width, tuned::kDilationMinLag,
+                 tuned::kDilationMaxLag);
+  const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, tuned::kDilationCorrelationStep, threads);
+  const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
+  const int k = far > 0.0f && near < tuned::kCorrelatedVarianceRatio * far
+                    ? std::clamp((tuned::kDilationPerWidth * frame.width + rounding) / width, tuned::kDilationMin,
+                                 tuned::kDilationMax)
+                    : 1;
+  // Strong noise: more than kStrongNoiseFootprints pixel footprints at half the reference lag.
+  return c.scale_in_footprints[lag / 2 - 1] > tuned::kStrongNoiseFootprints ? 2 * k : k;
+}
+
+int
+detail::chooseDilation(const Grid& input, const FilterParameters& parameters, StageTracker& split)
+{
+  const bool empty = input.countValid() == 0;
+  int k = parameters.dilation;
+  if (k == 0) {
+    split.start(Stage::dilation);
+    // Automatic: contiguous windows unless every phase still holds the windows, and nothing to
+    // estimate in a frame without a valid point (runContiguous says so).
+    const int needed = std::max({parameters.search_window, parameters.patch_size, parameters.normal_window,
+                                 parameters.normal_presmooth_window});
+    k = empty ? 1 : automaticDilation(input, resolveThreads(parameters.threads));
+    if (input.width / k < needed || input.height / k < needed)
+      k = 1;
+  }
+  return empty ? 1 : k;
+}
+
+void
+detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                         const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace,
+                         int k, StageTracker& split)
+{
+  split.start(Stage::dilation);
+  const Grid& input = *frames[center];
+  if (!sameSize(frames, input)) {
+    split.stop();
+    runContiguous(frames, center, parameters, viewpoint, active, workspace); // reports the size error
+    return;
+  }
+  FilterParameters coarse = parameters;
+  coarse.dilation = 1;
+  coarse.iterations = std::max(1, parameters.iterations - 1);
+  const int threads = resolveThreads(parameters.threads);
+  // Kept in the workspace: the next run on frames of this size allocates nothing here.
+  Grid& result = workspace.merged;
+  copyGrid(input, result, threads);
+  std::vector<Grid>& sub = workspace.phase_frames;
+  sub.resize(frames.size());
+  std::vector<const Grid*> sub_frames(frames.size());
+  std::vector<unsigned char> sub_active;
+  workspace.phase.resize(1);
+  Workspace& phase = workspace.phase.front();
+  phase.observer = workspace.observer;
+  phase.frames_moved = workspace.frames_moved;
+  for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
+    for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        subsample(*frames[f], k, u0, v0, sub[f], threads);
+        sub_frames[f] = &sub[f];
+      }
+      if (!active.empty())
+        subsample(active, input.width, input.height, k, u0, v0, sub_active, threads);
+      split.stop();
+      try {
+        runContiguous(sub_frames, center, coarse, viewpoint, sub_active, phase);
+      } catch (const UnfilterableFrame&) {
+        split.start(Stage::dilation);
+        continue; // this phase keeps its points
+      }
+      split.start(Stage::dilation);
+      mergePhase(phase.run.output, k, u0, v0, result, threads);
+    }
+  split.stop();
+  finishDilatedPasses(frames, center, parameters, viewpoint, active, workspace);
+}
+
+} // namespace range_nlm

@@ -1,0 +1,123 @@
+// The stages of runFilter, in the order they run (docs/method.md, "The static filter" and "The
+// temporal filter"). Each lives in the file of its name under src/core/stages/.
+#pragma once
+
+#include "../frame_context.h"
+
+#include <vector>
+
+namespace range_nlm
+{
+namespace detail
+{
+
+// Once per call, on the frames as given (runFilter).
+
+/// The current frame `input` with its isolated outliers moved onto their neighbours' surface
+/// (FilterParameters::outlier_sigmas), so that every later stage (noise estimates, frame
+/// comparisons, normals) sees them there: workspace.corrected if some moved, else `input`.
+/// Sets workspace.run.outliers_moved. (correct_outliers.cpp)
+const Grid*
+correctOutliersStage(const Grid& input, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                     const std::vector<unsigned char>& active, Workspace& workspace);
+
+/// The frames with low-frequency offsets between them levelled (levelFrames) in
+/// workspace.leveled, or `frames` as they are; workspace.frames_moved receives the frames'
+/// motion analysis. (level_frames.cpp)
+std::vector<const Grid*>
+levelNeighbourFrames(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                     const Viewpoint& viewpoint, Workspace& workspace);
+
+/// The dilation the run uses: FilterParameters::dilation, or the automatic one (timed as
+/// Stage::dilation on `split`); 1 for a frame without a valid point. (dilated_passes.cpp)
+int
+chooseDilation(const Grid& input, const FilterParameters& parameters, StageTracker& split);
+
+/// The dilated passes with dilation k > 1: each phase (u mod k, v mod k) of the frames filtered
+/// as a grid of its own whose neighbours are k pixels apart, the phases merged, then (with more
+/// than one iteration) a last contiguous pass on the full frame. The split and merge are timed
+/// as Stage::dilation on `split`. (dilated_passes.cpp)
+void
+runDilatedPasses(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                 const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace, int k,
+                 StageTracker& split);
+
+/// The filter with contiguous windows: the stages below, `iterations` times. (pipeline.cpp)
+void
+runContiguous(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+              const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
+
+// Once per contiguous run.
+
+/// Bandwidths (global model) or noise profiles (range-adaptive model) of the neighbour frames,
+/// from their own data; the range-adaptive model reads their profiles at the current frame's
+/// median range, kept with the ranges for the first iteration. (frame_bandwidths.cpp)
+void
+estimateNeighbourFrames(FrameContext& ctx);
+
+// Once per iteration.
+
+/// The normals of the current frame's raw points (global model: its bandwidths need them).
+/// (normal_fits.cpp)
+void
+fitRawNormals(FrameContext& ctx);
+
+/// The current frame's noise profile (range-adaptive model) or bandwidths (global model, from
+/// the raw normals). (frame_bandwidths.cpp)
+void
+estimateCurrentFrame(FrameContext& ctx);
+
+/// The per-point noise sigma of the current frame (workspace.sigma, times similarity_scale;
+/// range-adaptive: with the profile's sigma and extent maps), and the pre-smoothing bandwidths
+/// and normal gate where the stages after it use them. (noise_maps.cpp)
+void
+computeNoiseMaps(FrameContext& ctx);
+
+/// The profile (xs, ys) at every range of `rho` into `out`, by ctx.threads threads; with ys2
+/// and out2 also the profile (xs, *ys2) into out2, in the same scan. (noise_maps.cpp)
+void
+profileMap(const FrameContext& ctx, const std::vector<float>& xs, const std::vector<float>& ys,
+           const std::vector<float>& rho, std::vector<float>& out, const std::vector<float>* ys2 = nullptr,
+           std::vector<float>* out2 = nullptr);
+
+/// Per-point gates of `sigmas` noise sigmas (sig: the local noise sigma times similarity_scale)
+/// into `gate`; empty (no gate) for 0. (noise_maps.cpp)
+const std::vector<float>&
+gateInto(const FrameContext& ctx, float sigmas, const std::vector<float>& sig, std::vector<float>& gate);
+
+/// The current frame pre-smoothed along the rays (workspace.smooth), for the normal fits.
+/// (normal_fits.cpp)
+void
+presmoothCurrentFrame(FrameContext& ctx);
+
+/// The normals of `points` (the current frame or its pre-smoothed copy) with the normal gate of
+/// the noise maps. (normal_fits.cpp)
+void
+fitGatedNormals(FrameContext& ctx, const Grid& points);
+
+/// The frame terms of the iteration (ctx.terms, ctx.weights): frame weights Psi_k and, in the
+/// range-adaptive model, per-point 1 / d^2 and 1 / s^2 maps and the patch guide. (frame_terms.cpp)
+void
+buildFrameTerms(FrameContext& ctx);
+
+/// Guarded: adds neighbour k's unchanged points to the patch guide (docs/method.md, "The patch
+/// guide"); `sig` is its noise sigma map, `ratio` its frame-to-frame noise ratio, `moved`
+/// whether it moved. (patch_guide.cpp)
+void
+addToPatchGuide(FrameContext& ctx, int k, const std::vector<float>& sig, float ratio, bool moved);
+
+/// The patch guide's weighted sums made means, and named as the other frames' patch reference,
+/// where enough neighbours entered it. (patch_guide.cpp)
+void
+finishPatchGuide(FrameContext& ctx);
+
+/// The offsets h of the current frame's points (workspace.offsets). (offsets.cpp)
+void
+computeFrameOffsets(FrameContext& ctx);
+
+/// The current frame's points moved by their offsets. (displacement.cpp)
+void
+displaceCurrentFrame(FrameContext& ctx);
+
+} // namespace detail
+} // namespace range_nlm
