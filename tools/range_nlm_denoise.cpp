@@ -1,5 +1,6 @@
 // range_nlm_denoise: filters one organized PCD frame, or every frame of a directory (optionally
 // with the temporal filter, in one or several passes), keeping every field of the input.
+#include "cli/bag_job.h"
 #include "cli/cli.h"
 #include "cli/pipeline.h"
 #include "cli/shard.h"
@@ -9,10 +10,6 @@
 #include <range_nlm/temporal_stream.h>
 
 #include <nlohmann/json.hpp>
-
-#ifdef RANGE_NLM_WITH_ROS
-#include <range_nlm/ros/bag_filter.h>
-#endif
 
 #include <algorithm>
 #include <cerrno>
@@ -1061,99 +1058,6 @@ printJson(const Summary& s, const Job& job)
   std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
 }
 
-/// --input-bag: filters one topic of a rosbag (ros/, range_nlm_ros::filterBag).
-int
-runBag(const po::variables_map& vm)
-{
-#ifndef RANGE_NLM_WITH_ROS
-  (void)vm;
-  throw UsageError("--input-bag: this range_nlm_denoise was built without ROS support (install the ROS packages "
-                   "of scripts/setup.sh and rebuild)");
-#else
-  for (const char* other : {"input", "output", "input-dir", "output-dir"})
-    if (vm.count(other))
-      throw UsageError(std::string("--input-bag cannot be combined with ") +
-                       (std::string(other).find("dir") == std::string::npos ? "INPUT/OUTPUT files" : "--input-dir/--output-dir"));
-  for (const char* needed : {"input-bag", "output-bag", "topic"})
-    if (!vm.count(needed))
-      throw UsageError("bag mode needs --input-bag, --output-bag and --topic (missing --" + std::string(needed) + ")");
-  for (const char* unsupported : {"pass", "resume", "colorize"})
-    if (vm.count(unsupported))
-      throw UsageError(std::string("--") + unsupported + " is not supported with --input-bag");
-  if (vm["output-format"].as<std::string>() != "auto")
-    throw UsageError("--output-format is not supported with --input-bag (the bag keeps the messages' layout)");
-  range_nlm_ros::BagFilterOptions options;
-  options.input_bag = vm["input-bag"].as<std::string>();
-  options.output_bag = vm["output-bag"].as<std::string>();
-  options.topic = vm["topic"].as<std::string>();
-  options.keep_going = vm.count("keep-going") > 0;
-  options.settings.parameters = filterParametersFrom(vm);
-  options.settings.temporal_radius = vm["temporal-radius"].as<int>();
-  if (options.settings.temporal_radius < 0)
-    throw UsageError("--temporal-radius must be >= 0, got " + std::to_string(options.settings.temporal_radius));
-  options.settings.window = vm.count("recursive") ? TemporalWindow::recursive
-                            : vm.count("causal")  ? TemporalWindow::causal
-                                                  : TemporalWindow::centred;
-  const bool quiet = vm.count("quiet") > 0, json = vm.count("json") > 0;
-  std::unique_ptr<Progress> progress;
-  const auto start = std::chrono::steady_clock::now();
-  range_nlm_ros::BagFilterReport report;
-  try {
-    report = range_nlm_ros::filterBag(options, [&](std::size_t done, std::size_t total) {
-      if (!progress)
-        progress = std::make_unique<Progress>("range_nlm_denoise", total, options.settings.parameters.iterations,
-                                              !quiet && !json);
-      progress->update(done);
-    });
-  } catch (const range_nlm_ros::BagError& e) {
-    if (progress)
-      progress->finish();
-    throw InputError(e.what());
-  }
-  if (progress)
-    progress->finish();
-  std::size_t unfiltered = 0;
-  double total_ms = 0.0;
-  for (const auto& frame : report.frames) {
-    unfiltered += !frame.unfiltered.empty();
-    total_ms += frame.milliseconds;
-  }
-  if (json) {
-    nlohmann::json out;
-    nlohmann::json invalid = nlohmann::json::array();
-    for (const auto& i : report.invalid)
-      invalid.push_back({{"message", i.first}, {"error", i.second}});
-    out["frames"] = report.frames.size();
-    out["unfiltered"] = unfiltered;
-    out["invalid"] = invalid;
-    out["copied"] = report.copied;
-    out["restarts"] = report.restarts;
-    out["filter_ms_total"] = total_ms;
-    out["wall_ms"] = millisecondsSince(start);
-    std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
-  } else if (!quiet) {
-    for (const auto& frame : report.frames)
-      if (frame.unfiltered.empty())
-        std::cout << frame.message << ": " << std::fixed << std::setprecision(1) << frame.milliseconds << " ms"
-                  << std::endl;
-      else
-        std::cout << frame.message << ": not filtered, written unchanged (" << frame.unfiltered << ")" << std::endl;
-    std::cout << options.output_bag << ": " << report.frames.size() << " message(s) of " << options.topic
-              << " filtered (" << unfiltered << " unchanged), " << report.copied << " other message(s) copied"
-              << std::endl;
-  }
-  if (!report.invalid.empty()) {
-    std::cerr << "range_nlm_denoise: " << report.invalid.size() << " message(s) of " << options.topic
-              << " are not organized clouds and were copied unchanged:\n";
-    for (const auto& i : report.invalid)
-      std::cerr << "  " << i.first << ": " << i.second << "\n";
-    std::cerr << std::flush;
-    return 3;
-  }
-  return 0;
-#endif
-}
-
 int
 run(int argc, char** argv)
 {
@@ -1164,8 +1068,8 @@ run(int argc, char** argv)
   po::variables_map vm;
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
-  if (vm.count("input-bag") || vm.count("output-bag") || vm.count("topic"))
-    return runBag(vm);
+  if (wantsBagJob(vm))
+    return runBagJob(vm);
   const Job job = jobFrom(vm);
   // Shards of one recording share the directory and hold their own frames.
   const OutputDirectoryLock lock(job.single ? std::filesystem::path(job.outputs.front()).parent_path().string()
