@@ -3,7 +3,9 @@
 #include "cli/bag_job.h"
 #include "cli/cli.h"
 #include "cli/pipeline.h"
-#include "cli/shard.h"
+#include "cli/resume.h"
+#include "cli/run_lock.h"
+#include "cli/shard_options.h"
 
 #include <range_nlm/eval/render.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
@@ -12,10 +14,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <deque>
 #include <exception>
 #include <filesystem>
@@ -24,12 +24,6 @@
 #include <limits>
 #include <memory>
 #include <sstream>
-
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/file.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 namespace po = boost::program_options;
 using namespace range_nlm;
@@ -252,155 +246,6 @@ private:
   std::vector<bool> inputs_read_;
 };
 
-/// For --resume: removes the temporary files an interrupted run left beside `outputs`
-/// (".NAME.tmpPID", see saveCloudAtomic). The caller holds the output directory exclusively
-/// (OutputDirectoryLock), or with --shard those outputs (FrameRangeLock), so no running
-/// range_nlm_denoise can own one of them.
-void
-removeTemporaries(const std::vector<std::string>& outputs)
-{
-  namespace fs = std::filesystem;
-  std::vector<std::string> prefixes;
-  for (const std::string& output : outputs)
-    prefixes.push_back("." + fileName(output) + ".tmp");
-  std::error_code ec;
-  const fs::path dir = fs::path(outputs.front()).parent_path();
-  for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    for (const std::string& prefix : prefixes)
-      if (name.size() > prefix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
-          name.find_first_not_of("0123456789", prefix.size()) == std::string::npos) {
-        fs::remove(entry.path(), ec);
-        break;
-      }
-  }
-}
-
-/// Holds the directory a run writes into, so that runs cannot trip over each other's files: a
-/// directory run, and any run with --resume (which removes temporary files), holds it
-/// exclusively; a single-frame run shares it with other single-frame runs. A run that cannot get
-/// the lock is refused with a message. An flock on the directory itself, so no file is left
-/// behind; the kernel releases it however the process ends.
-class OutputDirectoryLock
-{
-public:
-  OutputDirectoryLock(const std::string& directory, bool exclusive)
-  {
-    const std::string dir = directory.empty() ? "." : directory;
-    fd_ = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd_ < 0)
-      throw InputError("cannot open output directory '" + dir + "': " + std::strerror(errno));
-    if (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
-      const int error = errno;
-      ::close(fd_);
-      fd_ = -1;
-      if (error == EWOULDBLOCK)
-        throw InputError("output directory '" + dir +
-                         "' is in use by another range_nlm_denoise run; wait for it to end or write elsewhere");
-      throw InputError("cannot lock output directory '" + dir + "': " + std::strerror(error));
-    }
-  }
-  ~OutputDirectoryLock()
-  {
-    if (fd_ >= 0)
-      ::close(fd_);
-  }
-  OutputDirectoryLock(const OutputDirectoryLock&) = delete;
-  OutputDirectoryLock& operator=(const OutputDirectoryLock&) = delete;
-
-private:
-  int fd_ = -1;
-};
-
-/// Holds the frames a --shard run writes, so that shards of one recording can write into one
-/// output directory at once while two runs that would write the same frame cannot: an exclusive
-/// lock on the byte range [first frame, last frame + 1) of OUTPUT_DIR/.range_nlm_denoise.lock,
-/// frame indices in the input's name order. Any two overlapping shards conflict, whatever their
-/// N. Open file description locks (F_OFD_SETLK; the kernel releases them however the process
-/// ends) are POSIX record locks, which NFS passes to the server, so shards on different nodes of
-/// a cluster exclude each other on a shared file system too. The file stays (empty) behind.
-class FrameRangeLock
-{
-public:
-  static constexpr const char* kFileName = ".range_nlm_denoise.lock";
-
-  FrameRangeLock(const std::string& directory, const FrameRange& frames, const std::vector<std::string>& inputs)
-  {
-    if (frames.empty())
-      return; // writes nothing
-    const std::string path = joinPath(directory, kFileName);
-    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-    if (fd_ < 0)
-      throw InputError("cannot open the lock file '" + path + "' of the shards: " + std::strerror(errno));
-    struct flock range = {};
-    range.l_type = F_WRLCK;
-    range.l_whence = SEEK_SET;
-    range.l_start = static_cast<off_t>(frames.begin);
-    range.l_len = static_cast<off_t>(frames.size());
-    int command = F_OFD_SETLK;
-    int result = ::fcntl(fd_, command, &range);
-    if (result != 0 && errno == EINVAL) { // no open file description locks: the process's own
-      command = F_SETLK;
-      result = ::fcntl(fd_, command, &range);
-    }
-    if (result == 0)
-      return;
-    const int error = errno;
-    struct flock holder = range;
-    const bool known = ::fcntl(fd_, command == F_OFD_SETLK ? F_OFD_GETLK : F_GETLK, &holder) == 0 &&
-                       holder.l_type != F_UNLCK;
-    ::close(fd_);
-    fd_ = -1;
-    if (error != EAGAIN && error != EACCES)
-      throw InputError("cannot lock frames in '" + path + "': " + std::strerror(error));
-    std::string message = "frames " + describe(frames, inputs) + " of output directory '" + directory +
-                          "' are being written by another range_nlm_denoise run";
-    if (known) {
-      const std::size_t first = static_cast<std::size_t>(holder.l_start);
-      const std::size_t end = holder.l_len == 0 ? inputs.size() : first + static_cast<std::size_t>(holder.l_len);
-      message += " (holding frames " + describe({first, std::min(end, inputs.size())}, inputs) + ")";
-    }
-    throw InputError(message + "; wait for it to end, or give each run its own shard");
-  }
-  ~FrameRangeLock()
-  {
-    if (fd_ >= 0)
-      ::close(fd_);
-  }
-  FrameRangeLock(const FrameRangeLock&) = delete;
-  FrameRangeLock& operator=(const FrameRangeLock&) = delete;
-
-private:
-  static std::string describe(const FrameRange& frames, const std::vector<std::string>& inputs)
-  {
-    std::string text = std::to_string(frames.begin) + ".." + std::to_string(frames.end - 1);
-    if (frames.end <= inputs.size() && !frames.empty())
-      text += " (" + fileName(inputs[frames.begin]) + " .. " + fileName(inputs[frames.end - 1]) + ")";
-    return text;
-  }
-  int fd_ = -1;
-};
-
-/// For --resume: `path` holds a complete output of a width x height frame.
-bool
-isFinishedOutput(const std::string& path, bool png, const DepthIntrinsics& intrinsics, unsigned width,
-                 unsigned height)
-{
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    return false;
-  try {
-    if (png) {
-      const Cloud cloud = loadDepthPng(path, intrinsics);
-      return cloud.width == width && cloud.height == height;
-    }
-    const LoadedCloud loaded = loadCloud(path);
-    return loaded.blob.width == width && loaded.blob.height == height;
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 /// How results are written: the input's fields (PCD), curvature colour (PCD) or 16-bit depth (PNG).
 struct OutputOptions
 {
@@ -506,10 +351,7 @@ struct Job
   OutputOptions output;
   bool resume = false, keep_going = false, quiet = false, json = false;
   /// The frames written and read (directory mode; without --shard: every frame, shard 0 of 1).
-  bool sharded = false;
-  Shard shard;
-  std::size_t warmup = kWholeHistory;
-  ShardPlan plan;
+  ShardJob sharding;
 };
 
 void
@@ -580,53 +422,6 @@ frameMemory(const std::vector<Pass>& passes, bool overlapped, std::uint64_t widt
   return pixels > UINT64_MAX / per_pixel ? UINT64_MAX : pixels * per_pixel;
 }
 
-/// --shard and --shard-warmup: the frames this run writes and reads.
-void
-shardFrom(const po::variables_map& vm, Job& job)
-{
-  job.sharded = vm.count("shard") > 0;
-  bool recursive = false;
-  std::size_t radius = 0;
-  for (const Pass& pass : job.passes)
-    if (pass.recursive && pass.radius > 0) {
-      recursive = true;
-      radius = std::max(radius, static_cast<std::size_t>(pass.radius));
-    }
-  if (vm.count("shard-warmup")) {
-    const std::string text = vm["shard-warmup"].as<std::string>();
-    if (!job.sharded)
-      throw UsageError("--shard-warmup " + text + " needs --shard");
-    if (!recursive)
-      throw UsageError("--shard-warmup " + text +
-                       " applies to --recursive runs only (other schedules are cut exactly, without warm-up)");
-    if (text == "all") {
-      job.warmup = kWholeHistory;
-    } else {
-      try {
-        std::size_t used = 0;
-        const long long v = std::stoll(text, &used);
-        if (used != text.size() || v < 0)
-          throw std::invalid_argument(text);
-        job.warmup = static_cast<std::size_t>(v);
-      } catch (const std::exception&) {
-        throw UsageError("--shard-warmup must be a number of frames >= 0 or 'all', got '" + text + "'");
-      }
-    }
-  } else if (job.sharded) {
-    job.warmup = kWarmupPerRadius * radius;
-  }
-  if (job.sharded) {
-    if (job.single)
-      throw UsageError("--shard cuts a directory of frames; give --input-dir and --output-dir");
-    job.shard = parseShard(vm["shard"].as<std::string>(), [](const char* name) { return std::getenv(name); });
-    std::error_code ec;
-    if (std::filesystem::equivalent(vm["input-dir"].as<std::string>(), job.output_dir, ec))
-      throw UsageError("--shard cannot write into the input directory: a shard would read frames another shard has "
-                       "already filtered as its neighbours");
-  }
-  job.plan = planShard(job.inputs.size(), job.shard, reachOf(job.passes), job.warmup);
-}
-
 Job
 jobFrom(const po::variables_map& vm)
 {
@@ -687,7 +482,7 @@ jobFrom(const po::variables_map& vm)
   if (!job.single)
     for (std::string& output : job.outputs)
       output = replaceExtension(output, job.output.png ? ".png" : ".pcd");
-  shardFrom(vm, job);
+  job.sharding = shardJobFrom(vm, {reachOf(job.passes), job.single, job.inputs.size(), job.output_dir, kWarmupPerRadius});
   return job;
 }
 
@@ -725,11 +520,11 @@ public:
   /// Frames are pushed from the first frame the shard reads on; index i of wanted_ and of the
   /// chain is frame reads_.begin + i (without --shard: every frame, from 0).
   FrameRun(const Job& job, const po::variables_map& vm)
-      : job_(job), reads_(job.plan.reads.front()), intrinsics_warning_("range_nlm_denoise", vm),
+      : job_(job), reads_(job.sharding.plan.reads.front()), intrinsics_warning_("range_nlm_denoise", vm),
         wanted_(reads_.size(), false),
-        progress_("range_nlm_denoise", job.plan.writes.size(), iterationsPerFrame(job.passes), !job.quiet)
+        progress_("range_nlm_denoise", job.sharding.plan.writes.size(), iterationsPerFrame(job.passes), !job.quiet)
   {
-    for (std::size_t f = job.plan.writes.begin; f < job.plan.writes.end; ++f)
+    for (std::size_t f = job.sharding.plan.writes.begin; f < job.sharding.plan.writes.end; ++f)
       wanted_[f - reads_.begin] = true;
   }
 
@@ -738,13 +533,13 @@ public:
   Summary run()
   {
     const auto start = std::chrono::steady_clock::now();
-    const FrameRange& writes = job_.plan.writes;
+    const FrameRange& writes = job_.sharding.plan.writes;
     if (job_.resume && !writes.empty()) {
       removeTemporaries({job_.outputs.begin() + writes.begin, job_.outputs.begin() + writes.end});
       resumeFrom();
     }
     std::vector<std::size_t> history_begin; // of each recursive pass, counted from reads_.begin
-    for (const FrameRange& read : job_.plan.reads)
+    for (const FrameRange& read : job_.sharding.plan.reads)
       history_begin.push_back(read.begin >= reads_.begin ? read.begin - reads_.begin : 0);
     PassChain chain(job_.passes, wanted_, history_begin, &progress_);
     std::vector<std::size_t> read_order; // the frames loaded, in order
@@ -778,7 +573,7 @@ private:
   /// The frames of the run through the chain, their results handed to the writer.
   void filterAll(PassChain& chain, ReadAhead<ReadFrame>& reader)
   {
-    const FrameRange& writes = job_.plan.writes;
+    const FrameRange& writes = job_.sharding.plan.writes;
     std::size_t deferred = 0; // unreadable frames before the sequence's size is known
     for (std::size_t f = reads_.begin; f < reads_.end; ++f) {
       const bool halo = !writes.contains(f);
@@ -880,19 +675,14 @@ private:
   /// --resume: which outputs are complete already.
   void resumeFrom()
   {
-    for (std::size_t f = job_.plan.writes.begin; f < job_.plan.writes.end; ++f) {
-      if (summary_.width == 0) {
-        try {
-          const LoadedCloud first = loadFrame(job_.inputs[f], job_.intrinsics, job_.budget);
-          summary_.width = first.blob.width;
-          summary_.height = first.blob.height;
-        } catch (const InputError&) {
-          continue; // reported when the frame's turn comes
-        }
-      }
-      wanted_[f - reads_.begin] = !isFinishedOutput(job_.outputs[f], job_.output.png, job_.intrinsics, summary_.width,
-                                     summary_.height);
-    }
+    const FrameRange& writes = job_.sharding.plan.writes;
+    FrameSize size;
+    const std::vector<bool> finished = finishedOutputs(job_.inputs, job_.outputs, writes, job_.output.png,
+                                                       job_.intrinsics, job_.budget, size);
+    summary_.width = size.width;
+    summary_.height = size.height;
+    for (std::size_t f = writes.begin; f < writes.end; ++f)
+      wanted_[f - reads_.begin] = !finished[f - writes.begin];
   }
 
   void checkSize(const LoadedCloud& loaded, const std::string& path)
@@ -988,24 +778,6 @@ private:
   WriteBehind* writer_ = nullptr; // during run()
 };
 
-/// What a shard writes and reads, for the first line of its output.
-std::string
-shardLine(const Job& job)
-{
-  const ShardPlan& plan = job.plan;
-  std::ostringstream line;
-  line << "shard " << job.shard.index << "/" << job.shard.count << ": ";
-  if (plan.writes.empty()) {
-    line << "no frames to write (" << job.inputs.size() << " frames, " << job.shard.count << " shards)";
-    return line.str();
-  }
-  auto name = [&](std::size_t f) { return fileName(job.inputs[f]); };
-  line << "frames " << plan.writes.begin << ".." << plan.writes.end - 1 << " of " << job.inputs.size() << " ("
-       << name(plan.writes.begin) << " .. " << name(plan.writes.end - 1) << "), reading frames "
-       << plan.reads.front().begin << ".." << plan.reads.front().end - 1;
-  return line.str();
-}
-
 void
 printJson(const Summary& s, const Job& job)
 {
@@ -1039,19 +811,18 @@ printJson(const Summary& s, const Job& job)
   out["filter_ms_total"] = total;
   out["wall_ms"] = s.wall_ms;
   out["outputs"] = outputs;
-  if (job.sharded) {
-    const ShardPlan& plan = job.plan;
-    out["shard"] = {{"index", job.shard.index},
-                    {"count", job.shard.count},
+  if (job.sharding.sharded) {
+    const ShardPlan& plan = job.sharding.plan;
+    out["shard"] = {{"index", job.sharding.shard.index},
+                    {"count", job.sharding.shard.count},
                     {"sequence_frames", job.inputs.size()},
                     {"first_frame", plan.writes.begin},
                     {"frames", plan.writes.size()},
                     {"first_frame_read", plan.reads.front().begin},
                     {"frames_read", plan.reads.front().size()}};
-    const bool recursive = std::any_of(job.passes.begin(), job.passes.end(),
-                                       [](const Pass& p) { return p.recursive && p.radius > 0; });
-    if (recursive)
-      out["shard"]["warmup"] = job.warmup == kWholeHistory ? nlohmann::json("all") : nlohmann::json(job.warmup);
+    if (hasRecursivePass(reachOf(job.passes)))
+      out["shard"]["warmup"] =
+          job.sharding.warmup == kWholeHistory ? nlohmann::json("all") : nlohmann::json(job.sharding.warmup);
   }
   // Non-finite numbers (an infinite bandwidth) become null; invalid UTF-8 in a file name is
   // replaced rather than ending the run.
@@ -1074,12 +845,12 @@ run(int argc, char** argv)
   // Shards of one recording share the directory and hold their own frames.
   const OutputDirectoryLock lock(job.single ? std::filesystem::path(job.outputs.front()).parent_path().string()
                                              : job.output_dir,
-                                  job.sharded ? false : !job.single || job.resume);
+                                  job.sharding.sharded ? false : !job.single || job.resume);
   std::unique_ptr<FrameRangeLock> frames_lock;
-  if (job.sharded) {
-    frames_lock = std::make_unique<FrameRangeLock>(job.output_dir, job.plan.writes, job.inputs);
+  if (job.sharding.sharded) {
+    frames_lock = std::make_unique<FrameRangeLock>(job.output_dir, job.sharding.plan.writes, job.inputs);
     if (!job.quiet && !job.json)
-      std::cout << shardLine(job) << std::endl;
+      std::cout << describeShard(job.sharding, job.inputs) << std::endl;
   }
   FrameRun frames(job, vm);
   const Summary summary = frames.run();
