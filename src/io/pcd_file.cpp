@@ -192,8 +192,9 @@ isValidValue(const std::string& token, int size, char type)
   return v >= -limit && v < limit;
 }
 
-PcdLayout
-readPcdLayout(const std::string& path, std::uint64_t file_size)
+/// The first bytes of a PCD file, as many as its header may take (kMaxHeaderBytes).
+std::string
+readHeaderBytes(const std::string& path, std::uint64_t file_size)
 {
   std::ifstream in(path, std::ios::binary);
   if (!in)
@@ -202,10 +203,233 @@ readPcdLayout(const std::string& path, std::uint64_t file_size)
   in.read(&head[0], static_cast<std::streamsize>(head.size()));
   if (in.gcount() != static_cast<std::streamsize>(head.size()))
     fail(path, "read error in the PCD header");
+  return head;
+}
 
-  PcdLayout layout;
-  std::vector<std::uint64_t> counts;
-  bool have_width = false, have_height = false, have_points = false, have_size = false, have_type = false;
+const std::string kMalformed = "malformed PCD header: ";
+
+/// Builds a PcdLayout from the header's lines, one keyword line at a time, then checks it as a
+/// whole (finish): the field table and the cloud's size.
+class PcdHeaderParser
+{
+public:
+  explicit PcdHeaderParser(const std::string& path) : path_(path) {}
+
+  /// One line of the header, `t` its tokens (t[0] the keyword, not a comment); `last`: the line
+  /// has no newline, `next` is where the line after it starts. True at the DATA line, the last
+  /// of the header.
+  bool parseLine(const std::vector<std::string>& t, const std::string& line, bool last, std::size_t next)
+  {
+    const std::string& key = t[0];
+    if (key == "VERSION")
+      return false;
+    if (key == "FIELDS" || key == "COLUMNS")
+      parseFields(t);
+    else if (key == "SIZE")
+      parseSize(t);
+    else if (key == "TYPE")
+      parseType(t);
+    else if (key == "COUNT")
+      parseCount(t);
+    else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS")
+      parseDimension(t);
+    else if (key == "VIEWPOINT")
+      parseViewpoint(t);
+    else if (key == "DATA") {
+      parseData(t, last, next);
+      return true;
+    } else {
+      fail(path_, kMalformed + "unexpected line " + quote(line));
+    }
+    return false;
+  }
+
+  /// The layout, once the DATA line is read: every field typed and packed, the size checked.
+  PcdLayout finish()
+  {
+    if (layout_.fields.empty())
+      fail(path_, "malformed PCD header: no FIELDS line");
+    if (!have_size_ || !have_type_)
+      fail(path_, std::string("malformed PCD header: no ") + (have_size_ ? "TYPE" : "SIZE") + " line");
+    packFields();
+    checkSize();
+    return layout_;
+  }
+
+private:
+  void parseFields(const std::vector<std::string>& t)
+  {
+    const std::size_t n = t.size() - 1;
+    if (!layout_.fields.empty())
+      fail(path_, kMalformed + "second FIELDS line");
+    if (n == 0)
+      fail(path_, kMalformed + "FIELDS line names no field");
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < i; ++j)
+        if (t[i + 1] == t[j + 1] && t[i + 1] != "_")
+          fail(path_, kMalformed + "field " + quote(t[i + 1]) + " appears twice");
+      pcl::PCLPointField f;
+      f.name = t[i + 1];
+      layout_.fields.push_back(f);
+    }
+    layout_.sizes.assign(n, 4);
+    layout_.types.assign(n, 'F');
+    counts_.assign(n, 1);
+  }
+
+  void parseSize(const std::vector<std::string>& t)
+  {
+    needFields(t);
+    for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+      const std::uint64_t v = number(t[0], t[i + 1]);
+      if (v != 1 && v != 2 && v != 4 && v != 8)
+        fail(path_, kMalformed + "field " + quote(layout_.fields[i].name) + " has SIZE " + std::to_string(v) +
+                        " (expected 1, 2, 4 or 8)");
+      layout_.sizes[i] = int(v);
+    }
+    have_size_ = true;
+  }
+
+  void parseType(const std::vector<std::string>& t)
+  {
+    needFields(t);
+    for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+      if (t[i + 1].size() != 1 || !std::strchr("FIUB", t[i + 1][0]))
+        fail(path_, kMalformed + "field " + quote(layout_.fields[i].name) + " has TYPE " + quote(t[i + 1]) +
+                        " (expected F, I, U or B)");
+      layout_.types[i] = t[i + 1][0];
+    }
+    have_type_ = true;
+  }
+
+  void parseCount(const std::vector<std::string>& t)
+  {
+    needFields(t);
+    for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+      counts_[i] = number(t[0], t[i + 1]);
+      if (counts_[i] < 1 || counts_[i] > kMaxPointStep)
+        fail(path_, kMalformed + "field " + quote(layout_.fields[i].name) + " has COUNT " + std::to_string(counts_[i]));
+    }
+  }
+
+  /// WIDTH, HEIGHT or POINTS.
+  void parseDimension(const std::vector<std::string>& t)
+  {
+    const std::string& key = t[0];
+    const std::size_t n = t.size() - 1;
+    if (n != 1)
+      fail(path_, kMalformed + key + " needs one value, got " + std::to_string(n));
+    bool& seen = key == "WIDTH" ? have_width_ : key == "HEIGHT" ? have_height_ : have_points_;
+    if (seen)
+      fail(path_, kMalformed + "second " + key + " line");
+    seen = true;
+    (key == "WIDTH" ? layout_.width : key == "HEIGHT" ? layout_.height : layout_.points) = number(key, t[1]);
+  }
+
+  void parseViewpoint(const std::vector<std::string>& t)
+  {
+    const std::size_t n = t.size() - 1;
+    if (n != 7)
+      fail(path_, kMalformed + "VIEWPOINT needs 7 values (tx ty tz qw qx qy qz), got " + std::to_string(n));
+    float v[7];
+    for (std::size_t i = 0; i < 7; ++i) {
+      const std::string& token = t[i + 1];
+      v[i] = std::strtof(token.c_str(), nullptr);
+      if (!isDecimalNumber(token) || !std::isfinite(v[i]))
+        fail(path_, kMalformed + "VIEWPOINT value " + quote(token) + " is not a finite number");
+    }
+    layout_.origin = Eigen::Vector4f(v[0], v[1], v[2], 0.0f);
+    layout_.orientation = Eigen::Quaternionf(v[3], v[4], v[5], v[6]);
+  }
+
+  void parseData(const std::vector<std::string>& t, bool last, std::size_t next)
+  {
+    const std::size_t n = t.size() - 1;
+    if (n != 1 || (t[1] != "ascii" && t[1] != "binary" && t[1] != "binary_compressed"))
+      fail(path_, kMalformed + "DATA must be ascii, binary or binary_compressed, got " +
+                      quote(n ? t[1] : std::string()));
+    layout_.data = t[1] == "ascii"    ? PcdLayout::Data::ascii
+                   : t[1] == "binary" ? PcdLayout::Data::binary
+                                      : PcdLayout::Data::binary_compressed;
+    if (last && layout_.data != PcdLayout::Data::ascii)
+      fail(path_, "truncated PCD header (DATA line not terminated)");
+    layout_.data_offset = next;
+  }
+
+  /// A line of values per field (SIZE, TYPE, COUNT): after FIELDS, one value for each field.
+  void needFields(const std::vector<std::string>& t) const
+  {
+    const std::size_t n = t.size() - 1;
+    if (layout_.fields.empty())
+      fail(path_, kMalformed + t[0] + " line before the FIELDS line");
+    if (n != layout_.fields.size())
+      fail(path_, kMalformed + t[0] + " has " + std::to_string(n) + " values for " +
+                      std::to_string(layout_.fields.size()) + " fields");
+  }
+
+  std::uint64_t number(const std::string& key, const std::string& token) const
+  {
+    std::uint64_t v = 0;
+    if (!parseUnsigned(token, v))
+      fail(path_, kMalformed + key + " value " + quote(token) + " is not a non-negative integer");
+    return v;
+  }
+
+  /// The field table: each field's PCL datatype, count and offset, packed in FIELDS order.
+  void packFields()
+  {
+    std::uint64_t offset = 0;
+    for (std::size_t i = 0; i < layout_.fields.size(); ++i) {
+      pcl::PCLPointField& f = layout_.fields[i];
+      const int datatype = pcl::getFieldType(layout_.sizes[i], layout_.types[i]);
+      if (datatype < 0)
+        fail(path_, "malformed PCD header: field " + quote(f.name) + " has TYPE " + layout_.types[i] +
+                        " with SIZE " + std::to_string(layout_.sizes[i]));
+      f.datatype = static_cast<std::uint8_t>(datatype);
+      f.count = static_cast<std::uint32_t>(counts_[i]);
+      f.offset = static_cast<std::uint32_t>(offset);
+      offset += counts_[i] * layout_.sizes[i];
+      if (offset > kMaxPointStep)
+        fail(path_, "malformed PCD header: a point would take more than " + std::to_string(kMaxPointStep) + " bytes");
+    }
+    layout_.point_step = offset;
+  }
+
+  /// WIDTH, HEIGHT and POINTS agree and stay within kMaxPoints.
+  void checkSize()
+  {
+    if (!have_width_ && !have_height_) {
+      layout_.width = layout_.points; // PCD v0.6: a list of POINTS points
+      layout_.height = 1;
+    } else if (!have_height_) {
+      layout_.height = 1;
+    } else if (!have_width_) {
+      fail(path_, "malformed PCD header: HEIGHT without WIDTH");
+    }
+    if (layout_.width == 0 || layout_.height == 0)
+      fail(path_, "cloud has zero width or height (" + std::to_string(layout_.width) + " x " +
+                      std::to_string(layout_.height) + ")");
+    if (layout_.width > kMaxPoints || layout_.height > kMaxPoints || layout_.width * layout_.height > kMaxPoints)
+      fail(path_, "absurd size " + std::to_string(layout_.width) + " x " + std::to_string(layout_.height) +
+                      " (more than " + std::to_string(kMaxPoints) + " points)");
+    if (!have_points_)
+      layout_.points = layout_.width * layout_.height;
+    if (layout_.points != layout_.width * layout_.height)
+      fail(path_, "malformed PCD header: POINTS " + std::to_string(layout_.points) + " but WIDTH x HEIGHT = " +
+                      std::to_string(layout_.width * layout_.height));
+  }
+
+  const std::string& path_;
+  PcdLayout layout_;
+  std::vector<std::uint64_t> counts_; // COUNT of each field
+  bool have_width_ = false, have_height_ = false, have_points_ = false, have_size_ = false, have_type_ = false;
+};
+
+PcdLayout
+readPcdLayout(const std::string& path, std::uint64_t file_size)
+{
+  const std::string head = readHeaderBytes(path, file_size);
+  PcdHeaderParser parser(path);
   std::size_t pos = 0;
   while (true) {
     if (pos >= head.size())
@@ -224,141 +448,9 @@ readPcdLayout(const std::string& path, std::uint64_t file_size)
       fail(path, "malformed PCD header: a line holds only blanks");
     if (t[0][0] == '#')
       continue;
-    const std::string& key = t[0];
-    const std::size_t n = t.size() - 1;
-    const std::string bad = "malformed PCD header: ";
-    auto need_fields = [&] {
-      if (layout.fields.empty())
-        fail(path, bad + key + " line before the FIELDS line");
-      if (n != layout.fields.size())
-        fail(path, bad + key + " has " + std::to_string(n) + " values for " +
-                       std::to_string(layout.fields.size()) + " fields");
-    };
-    auto number = [&](const std::string& token) {
-      std::uint64_t v = 0;
-      if (!parseUnsigned(token, v))
-        fail(path, bad + key + " value " + quote(token) + " is not a non-negative integer");
-      return v;
-    };
-    if (key == "VERSION") {
-      continue;
-    } else if (key == "FIELDS" || key == "COLUMNS") {
-      if (!layout.fields.empty())
-        fail(path, bad + "second FIELDS line");
-      if (n == 0)
-        fail(path, bad + "FIELDS line names no field");
-      for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t j = 0; j < i; ++j)
-          if (t[i + 1] == t[j + 1] && t[i + 1] != "_")
-            fail(path, bad + "field " + quote(t[i + 1]) + " appears twice");
-        pcl::PCLPointField f;
-        f.name = t[i + 1];
-        layout.fields.push_back(f);
-      }
-      layout.sizes.assign(n, 4);
-      layout.types.assign(n, 'F');
-      counts.assign(n, 1);
-    } else if (key == "SIZE") {
-      need_fields();
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::uint64_t v = number(t[i + 1]);
-        if (v != 1 && v != 2 && v != 4 && v != 8)
-          fail(path, bad + "field " + quote(layout.fields[i].name) + " has SIZE " + std::to_string(v) +
-                         " (expected 1, 2, 4 or 8)");
-        layout.sizes[i] = int(v);
-      }
-      have_size = true;
-    } else if (key == "TYPE") {
-      need_fields();
-      for (std::size_t i = 0; i < n; ++i) {
-        if (t[i + 1].size() != 1 || !std::strchr("FIUB", t[i + 1][0]))
-          fail(path, bad + "field " + quote(layout.fields[i].name) + " has TYPE " + quote(t[i + 1]) +
-                         " (expected F, I, U or B)");
-        layout.types[i] = t[i + 1][0];
-      }
-      have_type = true;
-    } else if (key == "COUNT") {
-      need_fields();
-      for (std::size_t i = 0; i < n; ++i) {
-        counts[i] = number(t[i + 1]);
-        if (counts[i] < 1 || counts[i] > kMaxPointStep)
-          fail(path, bad + "field " + quote(layout.fields[i].name) + " has COUNT " + std::to_string(counts[i]));
-      }
-    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
-      if (n != 1)
-        fail(path, bad + key + " needs one value, got " + std::to_string(n));
-      bool& seen = key == "WIDTH" ? have_width : key == "HEIGHT" ? have_height : have_points;
-      if (seen)
-        fail(path, bad + "second " + key + " line");
-      seen = true;
-      (key == "WIDTH" ? layout.width : key == "HEIGHT" ? layout.height : layout.points) = number(t[1]);
-    } else if (key == "VIEWPOINT") {
-      if (n != 7)
-        fail(path, bad + "VIEWPOINT needs 7 values (tx ty tz qw qx qy qz), got " + std::to_string(n));
-      float v[7];
-      for (std::size_t i = 0; i < 7; ++i) {
-        const std::string& token = t[i + 1];
-        v[i] = std::strtof(token.c_str(), nullptr);
-        if (!isDecimalNumber(token) || !std::isfinite(v[i]))
-          fail(path, bad + "VIEWPOINT value " + quote(token) + " is not a finite number");
-      }
-      layout.origin = Eigen::Vector4f(v[0], v[1], v[2], 0.0f);
-      layout.orientation = Eigen::Quaternionf(v[3], v[4], v[5], v[6]);
-    } else if (key == "DATA") {
-      if (n != 1 || (t[1] != "ascii" && t[1] != "binary" && t[1] != "binary_compressed"))
-        fail(path, bad + "DATA must be ascii, binary or binary_compressed, got " +
-                       quote(n ? t[1] : std::string()));
-      layout.data = t[1] == "ascii"    ? PcdLayout::Data::ascii
-                    : t[1] == "binary" ? PcdLayout::Data::binary
-                                       : PcdLayout::Data::binary_compressed;
-      if (last && layout.data != PcdLayout::Data::ascii)
-        fail(path, "truncated PCD header (DATA line not terminated)");
-      layout.data_offset = pos;
-      break;
-    } else {
-      fail(path, bad + "unexpected line " + quote(line));
-    }
+    if (parser.parseLine(t, line, last, pos))
+      return parser.finish();
   }
-
-  if (layout.fields.empty())
-    fail(path, "malformed PCD header: no FIELDS line");
-  if (!have_size || !have_type)
-    fail(path, std::string("malformed PCD header: no ") + (have_size ? "TYPE" : "SIZE") + " line");
-  std::uint64_t offset = 0;
-  for (std::size_t i = 0; i < layout.fields.size(); ++i) {
-    pcl::PCLPointField& f = layout.fields[i];
-    const int datatype = pcl::getFieldType(layout.sizes[i], layout.types[i]);
-    if (datatype < 0)
-      fail(path, "malformed PCD header: field " + quote(f.name) + " has TYPE " + layout.types[i] + " with SIZE " +
-                     std::to_string(layout.sizes[i]));
-    f.datatype = static_cast<std::uint8_t>(datatype);
-    f.count = static_cast<std::uint32_t>(counts[i]);
-    f.offset = static_cast<std::uint32_t>(offset);
-    offset += counts[i] * layout.sizes[i];
-    if (offset > kMaxPointStep)
-      fail(path, "malformed PCD header: a point would take more than " + std::to_string(kMaxPointStep) + " bytes");
-  }
-  layout.point_step = offset;
-  if (!have_width && !have_height) {
-    layout.width = layout.points; // PCD v0.6: a list of POINTS points
-    layout.height = 1;
-  } else if (!have_height) {
-    layout.height = 1;
-  } else if (!have_width) {
-    fail(path, "malformed PCD header: HEIGHT without WIDTH");
-  }
-  if (layout.width == 0 || layout.height == 0)
-    fail(path, "cloud has zero width or height (" + std::to_string(layout.width) + " x " +
-                   std::to_string(layout.height) + ")");
-  if (layout.width > kMaxPoints || layout.height > kMaxPoints || layout.width * layout.height > kMaxPoints)
-    fail(path, "absurd size " + std::to_string(layout.width) + " x " + std::to_string(layout.height) +
-                   " (more than " + std::to_string(kMaxPoints) + " points)");
-  if (!have_points)
-    layout.points = layout.width * layout.height;
-  if (layout.points != layout.width * layout.height)
-    fail(path, "malformed PCD header: POINTS " + std::to_string(layout.points) + " but WIDTH x HEIGHT = " +
-                   std::to_string(layout.width * layout.height));
-  return layout;
 }
 
 std::uint32_t
