@@ -2,6 +2,7 @@
 #include "fast_math.h"
 
 #include "internal.h"
+#include "workspace.h"
 
 #include <algorithm>
 #ifdef _OPENMP
