@@ -10,6 +10,7 @@
 #include "cli/cli.h"
 
 #include <range_nlm/core/pipeline.h>
+#include <range_nlm/grid_adaptor.h>
 #include <range_nlm/nonlocal_means_filter.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
 #include <range_nlm/temporal_stream.h>
@@ -600,7 +601,7 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
     std::vector<const Grid*> pointers;
     for (const Grid& g : grids)
       pointers.push_back(&g);
-    Workspace workspace, direct_workspace;
+    FilterWorkspace workspace, direct_workspace;
     const std::function<void()> filter =
         temporal ? prepareTemporal(frames, fast)() : prepareStatic(frames.clouds[c], fast)();
     // The phases as the warm-up round's run reports them, so the breakdown cannot drift from
@@ -612,10 +613,10 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
       std::vector<double> ms;
       auto start = std::chrono::steady_clock::now();
       for (std::size_t k = 0; k < count; ++k)
-        detail::toGrid(*frames.clouds[k], grids[k]);
+        toGrid(*frames.clouds[k], grids[k]);
       ms.push_back(millisecondsSince(start));
       StageTimer timer;
-      workspace.observer = &timer;
+      workspace.setStageObserver(&timer);
       runFilter(pointers, static_cast<int>(c), fast, viewpoint, {}, workspace);
       if (round < 0)
         stages = timer.order;
@@ -625,7 +626,7 @@ benchBreakdown(const Settings& s, const Frames& frames, const FilterParameters& 
       }
       if (with_direct) {
         StageTimer direct_timer;
-        direct_workspace.observer = &direct_timer;
+        direct_workspace.setStageObserver(&direct_timer);
         runFilter(pointers, static_cast<int>(c), direct, viewpoint, {}, direct_workspace);
         ms.push_back(direct_timer.ms[static_cast<int>(Stage::offsets)] / p.iterations);
       }

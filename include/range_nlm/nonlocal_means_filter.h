@@ -5,6 +5,7 @@
 #pragma once
 
 #include <range_nlm/core/pipeline.h>
+#include <range_nlm/grid_adaptor.h>
 #include <range_nlm/parameter_setters.h>
 
 #include <pcl/filters/filter.h>
@@ -39,39 +40,25 @@ public:
   const Bandwidths& getBandwidths() const { return bandwidths_; }
   /// Isolated outliers moved onto their neighbours' surface by the last filter() call
   /// (FilterParameters::outlier_sigmas).
-  std::size_t getOutliersMoved() const { return workspace_.run.outliers_moved; }
+  std::size_t getOutliersMoved() const { return workspace_.result().outliers_moved; }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.
-  void setStageObserver(StageObserver* observer) { workspace_.observer = observer; }
+  void setStageObserver(StageObserver* observer) { workspace_.setStageObserver(observer); }
 
 protected:
   void applyFilter(PointCloud& output) override;
 
   Bandwidths bandwidths_;
   /// Buffers kept between filter() calls (frames of one size reuse them).
-  Workspace workspace_;
+  FilterWorkspace workspace_;
 };
 
-/// Adapter helpers shared by the filters (PCL cloud <-> kernel grid).
 namespace detail
 {
-/// Copies x, y, z of an organized cloud into a Grid; throws std::invalid_argument naming the
-/// problem if the cloud is not organized or holds an infinite coordinate.
-template <typename PointT>
-Grid
-toGrid(const pcl::PointCloud<PointT>& cloud, const char* what = "input cloud");
-/// The same into `grid`, reusing its storage when it has the cloud's size.
-template <typename PointT>
-void
-toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what = "input cloud");
 /// Active mask from PCL indices (empty = all points); throws on an out-of-range index.
 std::vector<unsigned char>
 activeMask(const pcl::Indices* indices, std::size_t size, bool use_indices);
-/// Copies the input to output and writes the grid's x, y, z; recomputes is_dense.
-template <typename PointT>
-void
-fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud<PointT>& output);
 } // namespace detail
 
 } // namespace range_nlm

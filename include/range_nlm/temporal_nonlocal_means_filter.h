@@ -50,11 +50,11 @@ public:
   const std::vector<Bandwidths>& getFrameBandwidths() const { return frame_bandwidths_; }
   /// Isolated outliers of the current frame moved onto their neighbours' surface by the last
   /// filter() call (FilterParameters::outlier_sigmas).
-  std::size_t getOutliersMoved() const { return workspace_.run.outliers_moved; }
+  std::size_t getOutliersMoved() const { return workspace_.result().outliers_moved; }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.
-  void setStageObserver(StageObserver* observer) { workspace_.observer = observer; }
+  void setStageObserver(StageObserver* observer) { workspace_.setStageObserver(observer); }
 
 protected:
   void applyFilter(PointCloud& output) override;
@@ -64,7 +64,7 @@ protected:
   std::vector<float> frame_weights_;
   std::vector<Bandwidths> frame_bandwidths_;
   /// Buffers kept between filter() calls (frames of one size reuse them).
-  Workspace workspace_;
+  FilterWorkspace workspace_;
 };
 
 } // namespace range_nlm

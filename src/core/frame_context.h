@@ -3,6 +3,7 @@
 #pragma once
 
 #include "internal.h"
+#include "workspace.h"
 
 #include <range_nlm/core/pipeline.h>
 

@@ -3,6 +3,7 @@
 #include "fast_math.h"
 
 #include "stages/stages.h"
+#include "workspace.h"
 
 #include <algorithm>
 #ifdef _OPENMP

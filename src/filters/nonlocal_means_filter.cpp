@@ -32,16 +32,3 @@ template class range_nlm::NonLocalMeansFilter<pcl::PointXYZRGB>;
 template class range_nlm::NonLocalMeansFilter<pcl::PointXYZRGBA>;
 template class range_nlm::NonLocalMeansFilter<pcl::PointNormal>;
 template class range_nlm::NonLocalMeansFilter<pcl::PointXYZRGBNormal>;
-
-// The adaptor helpers, for tools that convert clouds without a filter object.
-#define RANGE_NLM_INSTANTIATE_ADAPTORS(T)                                                                   \
-  template range_nlm::Grid range_nlm::detail::toGrid<T>(const pcl::PointCloud<T>&, const char*);            \
-  template void range_nlm::detail::toGrid<T>(const pcl::PointCloud<T>&, range_nlm::Grid&, const char*);     \
-  template void range_nlm::detail::fromGrid<T>(const pcl::PointCloud<T>&, const range_nlm::Grid&,           \
-                                               pcl::PointCloud<T>&);
-RANGE_NLM_INSTANTIATE_ADAPTORS(pcl::PointXYZ)
-RANGE_NLM_INSTANTIATE_ADAPTORS(pcl::PointXYZI)
-RANGE_NLM_INSTANTIATE_ADAPTORS(pcl::PointXYZRGB)
-RANGE_NLM_INSTANTIATE_ADAPTORS(pcl::PointXYZRGBA)
-RANGE_NLM_INSTANTIATE_ADAPTORS(pcl::PointNormal)
-RANGE_NLM_INSTANTIATE_ADAPTORS(pcl::PointXYZRGBNormal)

@@ -493,10 +493,10 @@ TEST(Dilation, DefaultRunIsTheSameForAnyThreadCountAndAReusedWorkspace)
   EXPECT_FALSE(sameBits(reference.output, first)); // it moved points
   for (int threads : {1, 2, 3}) {
     p.threads = threads;
-    Workspace workspace;
+    FilterWorkspace workspace;
     for (const Grid* g : {&first, &second, &first}) {
       runFilter({g}, 0, p, kOrigin, {}, workspace);
-      EXPECT_TRUE(sameBits(workspace.run.output, g == &first ? reference.output : other.output))
+      EXPECT_TRUE(sameBits(workspace.result().output, g == &first ? reference.output : other.output))
           << threads << " threads";
     }
   }

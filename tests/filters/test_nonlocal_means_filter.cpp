@@ -497,45 +497,6 @@ TYPED_TEST(PointTypes, FiltersGeometryAndKeepsOtherFields)
   EXPECT_FALSE(out.is_dense);
 }
 
-// The conversion to the grid decides validity from the bits of the coordinates: a point with any
-// NaN coordinate is invalid with NaN in all three, the extreme finite values (largest float,
-// denormal, negative zero) stay valid and unchanged, and the first infinity of either sign in
-// any coordinate is reported at its pixel, with a clean conversion before it.
-TEST(GridConversion, ValidityAndInfinitiesFromTheCoordinateBits)
-{
-  Cloud cloud(4, 3);
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    cloud[i].x = 0.1f * i, cloud[i].y = -0.2f, cloud[i].z = 1.0f + 0.01f * i;
-  cloud[1].y = std::nanf("");                       // one NaN coordinate
-  cloud[2].x = -std::numeric_limits<float>::max(); // extreme finite values
-  cloud[2].z = std::numeric_limits<float>::denorm_min();
-  cloud[3].y = -0.0f;
-  const Grid g = detail::toGrid(cloud);
-  ASSERT_EQ(g.size(), cloud.size());
-  EXPECT_EQ(g.valid[1], 0);
-  EXPECT_TRUE(std::isnan(g.x[1]) && std::isnan(g.y[1]) && std::isnan(g.z[1]));
-  for (std::size_t i : {0u, 2u, 3u, 11u}) {
-    EXPECT_EQ(g.valid[i], 1) << i;
-    EXPECT_EQ(g.x[i], cloud[i].x) << i;
-    EXPECT_EQ(g.y[i], cloud[i].y) << i;
-    EXPECT_EQ(g.z[i], cloud[i].z) << i;
-  }
-  EXPECT_TRUE(std::signbit(g.y[3]));
-  EXPECT_EQ(g.countValid(), cloud.size() - 1);
-
-  Cloud back;
-  detail::fromGrid(cloud, g, back);
-  EXPECT_FALSE(back.is_dense);
-  EXPECT_TRUE(std::isnan(back[1].x) && std::isnan(back[1].z));
-  EXPECT_EQ(back[2].x, cloud[2].x);
-
-  Cloud infinite = cloud;
-  infinite[9].y = -INFINITY; // pixel (1, 2)
-  infinite[10].z = INFINITY;
-  EXPECT_NE(errorOf([&] { detail::toGrid(infinite); }).find("infinite coordinate at pixel (1, 2)"),
-            std::string::npos);
-}
-
 // setNumberOfThreads with an absurd count: the filter refuses it before OpenMP sees it.
 TEST(NonLocalMeansFilter, AbsurdThreadCountIsRefusedNotCrashed)
 {

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -352,58 +353,47 @@ public:
   virtual void end(Stage stage, int iteration) = 0;
 };
 
+/// The buffers of a filter run (src/core/workspace.h; not part of the interface).
+struct Workspace;
+
 /// The buffers of a filter run, kept between runs (each filter object owns one). Runs on frames
 /// of one size then reuse memory that is already mapped: allocating and first touching the
 /// ~40 MB a VGA frame passes through cost about a sixth of the frame's time. Holds the last run's
-/// result and intermediates; its contents are not part of the interface.
-struct Workspace
+/// result; the intermediates it keeps are not part of the interface. Copies copy the buffers; a
+/// moved-from workspace may only be assigned to or destroyed.
+class FilterWorkspace
 {
-  /// The input frames as grids (filled by the pcl::Filter adaptors).
-  std::vector<Grid> inputs;
+public:
+  FilterWorkspace();
+  ~FilterWorkspace();
+  FilterWorkspace(const FilterWorkspace& other);
+  FilterWorkspace(FilterWorkspace&& other) noexcept;
+  FilterWorkspace& operator=(const FilterWorkspace& other);
+  FilterWorkspace& operator=(FilterWorkspace&& other) noexcept;
+
   /// The last run's result.
-  FilterRun run;
-  /// The normals, and the first of the gated fits' two passes.
-  NormalField normals, first_normals;
-  /// Offsets, local noise sigmas (times similarity_scale), displacement limits, patch gates.
-  std::vector<float> offsets, sigma, limit, patch_gate;
-  /// Per-point ranges, profile values (the current frame's sigma and extent, another frame's sigma
-  /// and extent) and per-frame bandwidth maps of a run.
-  std::vector<float> ranges, profile_sigma, center_extent, other_sigma, profile_extent, range_sigma, gate;
-  /// A neighbour's differences to the current frame along its normals, and the pixels of the
-  /// current frame that changed against it (guarded cross-frame bandwidths).
-  std::vector<float> along;
-  std::vector<unsigned char> changed;
-  std::vector<std::vector<float>> inverse_d2, inverse_s2;
-  /// Guarded: the patch guide (FrameTerm::patches), its per-pixel weights, and a neighbour's
-  /// changed pixels widened by the guide's margin.
-  Grid guide;
-  std::vector<float> guide_weight;
-  std::vector<unsigned char> widened;
-  /// The pre-smoothed copy the normals are fitted on.
-  Grid smooth;
-  /// Dilated passes: the frames of one phase, the merged result of all phases, and the
-  /// workspace of the phases' runs (one element once used).
-  std::vector<Grid> phase_frames;
-  Grid merged;
-  std::vector<Workspace> phase;
-  /// The current frame with its isolated outliers moved (FilterParameters::outlier_sigmas).
-  Grid corrected;
-  /// The frames brought to a common level (levelling of low-frequency offsets between frames),
-  /// and per frame whether it moved against the current one (-1: not analysed).
-  std::vector<Grid> leveled;
-  std::vector<signed char> frames_moved;
-  /// Padded planes of the normal fits and of the windowed evaluation.
-  std::vector<float> normal_planes, window_planes;
-  /// If set, told where each phase of a run begins and ends. Not owned.
-  StageObserver* observer = nullptr;
+  const FilterRun& result() const;
+  /// Grids for the input frames (the pcl::Filter adaptors convert their clouds into them): a run
+  /// whose current frame is one of them takes that grid over as the result's storage instead of
+  /// copying it (its contents are not kept), unless another frame is the same grid.
+  std::vector<Grid>& inputs();
+  /// Told where each phase of every run begins and ends (e.g. for timing, as range_nlm_bench
+  /// --breakdown does); null for none. Not owned.
+  void setStageObserver(StageObserver* observer);
+
+private:
+  friend void runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                        const Viewpoint& viewpoint, const std::vector<unsigned char>& active,
+                        FilterWorkspace& workspace);
+  std::unique_ptr<Workspace> workspace_;
 };
 
-/// runFilter with the result in `workspace.run` and every frame-sized buffer taken from
-/// `workspace`. `frames` may point into workspace.inputs; the current frame's grid there is then
-/// taken over as the result's storage (its contents are not kept) unless another frame is the
-/// same grid.
+/// runFilter with the result in `workspace.result()` and every frame-sized buffer taken from
+/// `workspace`. `frames` may point into workspace.inputs(); the current frame's grid there is
+/// then taken over as the result's storage (its contents are not kept) unless another frame is
+/// the same grid.
 void
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
-          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
+          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, FilterWorkspace& workspace);
 
 } // namespace range_nlm

@@ -1,105 +1,27 @@
 #pragma once
 
+#include <range_nlm/impl/grid_adaptor.hpp>
 #include <range_nlm/nonlocal_means_filter.h>
 
-#include <algorithm>
-#include <cmath>
-#include <cstddef>
-#include <cstdint>
-#include <cstring>
-#include <limits>
-#include <sstream>
-#include <stdexcept>
+#include <vector>
 
 namespace range_nlm
 {
-namespace detail
-{
-
-template <typename PointT>
-void
-toGrid(const pcl::PointCloud<PointT>& cloud, Grid& grid, const char* what)
-{
-  if (!cloud.isOrganized() || cloud.width == 0 || cloud.height == 0) {
-    std::ostringstream msg;
-    msg << "range_nlm: the " << what << " is not organized (width " << cloud.width << ", height "
-        << cloud.height << "); the filter needs a grid such as a depth-camera frame";
-    throw std::invalid_argument(msg.str());
-  }
-  if (cloud.points.size() != static_cast<std::size_t>(cloud.width) * cloud.height) {
-    std::ostringstream msg;
-    msg << "range_nlm: the " << what << " holds " << cloud.points.size() << " points but declares width x height = "
-        << cloud.width << " x " << cloud.height;
-    throw std::invalid_argument(msg.str());
-  }
-  // The points' x, y, z are the first three floats of every PCL point type that has them.
-  const std::ptrdiff_t first_infinite = grid.assignInterleaved(
-      &cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height), sizeof(PointT) / sizeof(float));
-  if (first_infinite >= 0) {
-    std::ostringstream msg;
-    msg << "range_nlm: the " << what << " has an infinite coordinate at pixel (" << first_infinite % cloud.width
-        << ", " << first_infinite / cloud.width << "); invalid points must be NaN";
-    throw std::invalid_argument(msg.str());
-  }
-}
-
-template <typename PointT>
-Grid
-toGrid(const pcl::PointCloud<PointT>& cloud, const char* what)
-{
-  Grid grid;
-  toGrid(cloud, grid, what);
-  return grid;
-}
-
-template <typename PointT>
-void
-fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud<PointT>& output)
-{
-  // An output of the input's size (a filter called again) keeps its storage; its points are
-  // copied below, in parallel, together with the new coordinates.
-  const bool copy_points = &output != &input && output.size() == input.size();
-  if (&output != &input) {
-    if (copy_points) {
-      output.header = input.header;
-      output.width = input.width;
-      output.height = input.height;
-      output.sensor_origin_ = input.sensor_origin_;
-      output.sensor_orientation_ = input.sensor_orientation_;
-    } else {
-      output = input;
-    }
-  }
-  unsigned dense = 1; // (an integer &, not &&: no branch per point)
-  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(output.size());
-#pragma omp parallel for schedule(static) reduction(& : dense)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    PointT& p = output[i];
-    if (copy_points)
-      p = input[i];
-    p.x = grid.x[i];
-    p.y = grid.y[i];
-    p.z = grid.z[i];
-    dense &= grid.valid[i];
-  }
-  output.is_dense = dense != 0;
-}
-
-} // namespace detail
 
 template <typename PointT>
 void
 NonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
 {
   const PointCloud& input = *this->input_;
-  workspace_.inputs.resize(1);
-  detail::toGrid(input, workspace_.inputs[0]);
+  std::vector<Grid>& grids = workspace_.inputs();
+  grids.resize(1);
+  toGrid(input, grids[0]);
   const std::vector<unsigned char> active =
       detail::activeMask(this->indices_.get(), input.size(), this->use_indices_ && !this->fake_indices_);
   const Viewpoint viewpoint{input.sensor_origin_[0], input.sensor_origin_[1], input.sensor_origin_[2]};
-  runFilter({&workspace_.inputs[0]}, 0, parameters_, viewpoint, active, workspace_);
-  bandwidths_ = workspace_.run.bandwidths.front();
-  detail::fromGrid(input, workspace_.run.output, output);
+  runFilter({&grids[0]}, 0, parameters_, viewpoint, active, workspace_);
+  bandwidths_ = workspace_.result().bandwidths.front();
+  fromGrid(input, workspace_.result().output, output);
 }
 
 } // namespace range_nlm

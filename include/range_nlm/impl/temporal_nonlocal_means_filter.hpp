@@ -39,18 +39,18 @@ TemporalNonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
   const PointCloud& input = *this->input_;
   // Without setFrames (or after setInputCloud with another cloud) the window is the input alone.
   const bool own_window = !frames_.empty() && frames_[current_].get() == &input;
-  std::vector<Grid>& grids = workspace_.inputs;
+  std::vector<Grid>& grids = workspace_.inputs();
   int center = 0;
   if (own_window) {
     grids.resize(frames_.size());
     for (std::size_t k = 0; k < frames_.size(); ++k) {
       const std::string what = "frame " + std::to_string(k) + " of the temporal window";
-      detail::toGrid(*frames_[k], grids[k], what.c_str());
+      toGrid(*frames_[k], grids[k], what.c_str());
     }
     center = static_cast<int>(current_);
   } else {
     grids.resize(1);
-    detail::toGrid(input, grids[0]);
+    toGrid(input, grids[0]);
   }
   std::vector<const Grid*> pointers;
   for (const Grid& g : grids)
@@ -59,9 +59,9 @@ TemporalNonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
       detail::activeMask(this->indices_.get(), input.size(), this->use_indices_ && !this->fake_indices_);
   const Viewpoint viewpoint{input.sensor_origin_[0], input.sensor_origin_[1], input.sensor_origin_[2]};
   runFilter(pointers, center, parameters_, viewpoint, active, workspace_);
-  frame_weights_ = workspace_.run.frame_weights;
-  frame_bandwidths_ = workspace_.run.bandwidths;
-  detail::fromGrid(input, workspace_.run.output, output);
+  frame_weights_ = workspace_.result().frame_weights;
+  frame_bandwidths_ = workspace_.result().bandwidths;
+  fromGrid(input, workspace_.result().output, output);
 }
 
 } // namespace range_nlm

@@ -45,16 +45,16 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   auto remember = [this, &frame](const PointCloud* filtered) {
     if (!recursive_ || radius_ == 0)
       return;
-    detail::toGrid(*frame, history_grid_, "frame");
+    toGrid(*frame, history_grid_, "frame");
     if (filtered)
-      detail::toGrid(*filtered, start_grid_, "output");
+      toGrid(*filtered, start_grid_, "output");
     const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
     updateRunningAverage(history_, history_grid_, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(),
                          parameters_.search_window, parameters_.bandwidth_samples, parameters_.seed,
                          parameters_.threads);
     if (!history_cloud_)
       history_cloud_.reset(new PointCloud);
-    detail::fromGrid(*frame, history_.average, *history_cloud_);
+    fromGrid(*frame, history_.average, *history_cloud_);
   };
   if (!wanted_[t - first_] && !recursive_)
     return nullptr;
