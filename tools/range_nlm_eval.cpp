@@ -274,11 +274,10 @@ runJitter(const po::variables_map& vm, const std::vector<std::string>& sequences
   return 0;
 }
 
-int
-run(int argc, char** argv)
+/// The options of every mode; `planar` gives the defaults of --raw.
+void
+addOptions(po::options_description& options, const PlanarRegionOptions& planar)
 {
-  const PlanarRegionOptions planar;
-  po::options_description options("Options");
   // clang-format off
   options.add_options()
     ("help,h", "print this help")
@@ -298,6 +297,162 @@ run(int argc, char** argv)
      "directory given as an argument");
   // clang-format on
   addDepthImageOptions(options);
+}
+
+/// The frames of a ground-truth run: GT, RESULT and (optionally) NOISY, frame k of each the same.
+struct GroundTruthJob
+{
+  std::vector<std::string> gt_frames, result_frames, input_frames;
+  bool has_input = false;
+  bool json = false;
+};
+
+/// GT and RESULT as the two positional arguments or as options, --input; all files or all
+/// directories with the same frame names.
+GroundTruthJob
+groundTruthJobFrom(const po::variables_map& vm, const std::vector<std::string>& paths)
+{
+  std::size_t next = 0;
+  std::string gt_path, result_path;
+  if (vm.count("gt"))
+    gt_path = vm["gt"].as<std::string>();
+  else if (next < paths.size())
+    gt_path = paths[next++];
+  if (vm.count("result"))
+    result_path = vm["result"].as<std::string>();
+  else if (next < paths.size())
+    result_path = paths[next++];
+  if (next < paths.size())
+    throw UsageError("unexpected argument '" + paths[next] + "' (expected GT and RESULT)");
+  if (gt_path.empty() || result_path.empty())
+    throw UsageError("expected GT and RESULT");
+  const std::string input_path = vm.count("input") ? vm["input"].as<std::string>() : std::string();
+  GroundTruthJob job;
+  job.has_input = !input_path.empty();
+  job.json = vm.count("json") > 0;
+
+  std::error_code ec;
+  auto checkExists = [&](const std::string& path) {
+    if (!fs::exists(path, ec))
+      throw InputError("'" + path + "': no such file or directory");
+  };
+  checkExists(gt_path);
+  checkExists(result_path);
+  if (job.has_input)
+    checkExists(input_path);
+  const bool directory = fs::is_directory(gt_path, ec);
+  auto checkKind = [&](const std::string& path) {
+    if (fs::is_directory(path, ec) != directory)
+      throw InputError("'" + path + "' is a " + (directory ? "file" : "directory") + " but the ground truth '" +
+                       gt_path + "' is a " + (directory ? "directory" : "file"));
+  };
+  checkKind(result_path);
+  if (job.has_input)
+    checkKind(input_path);
+
+  job.gt_frames = framesOf(gt_path, directory);
+  job.result_frames = framesOf(result_path, directory);
+  if (directory)
+    checkSameFrames(job.gt_frames, job.result_frames, gt_path, result_path);
+  if (job.has_input) {
+    job.input_frames = framesOf(input_path, directory);
+    if (directory)
+      checkSameFrames(job.gt_frames, job.input_frames, gt_path, input_path);
+  }
+  return job;
+}
+
+/// The scores of a ground-truth run: of the result, and of the noisy input if given.
+struct GroundTruthScores
+{
+  SequenceMetrics metrics;
+  std::unique_ptr<SequenceMetrics> input_metrics;
+  std::vector<std::string> names;
+  unsigned width = 0, height = 0;
+};
+
+GroundTruthScores
+score(const GroundTruthJob& job)
+{
+  SequenceEvaluator result_evaluator;
+  std::unique_ptr<SequenceEvaluator> input_evaluator;
+  if (job.has_input)
+    input_evaluator = std::make_unique<SequenceEvaluator>();
+  GroundTruthScores scores;
+  unsigned& width = scores.width;
+  unsigned& height = scores.height;
+  for (std::size_t k = 0; k < job.gt_frames.size(); ++k) {
+    const pcl::PointCloud<pcl::PointNormal> truth = loadTruth(job.gt_frames[k]);
+    if (k == 0) {
+      width = truth.width;
+      height = truth.height;
+    } else if (truth.width != width || truth.height != height) {
+      throw InputError("'" + job.gt_frames[k] + "': frame is " + std::to_string(truth.width) + " x " +
+                       std::to_string(truth.height) + " but the sequence is " + std::to_string(width) + " x " +
+                       std::to_string(height));
+    }
+    const pcl::PointCloud<pcl::PointXYZ> result = loadXyz(job.result_frames[k], truth, job.gt_frames[k]);
+    pcl::PointCloud<pcl::PointXYZ> input;
+    if (job.has_input)
+      input = loadXyz(job.input_frames[k], truth, job.gt_frames[k]);
+    try {
+      result_evaluator.add(truth, result, job.has_input ? &input : nullptr);
+      if (job.has_input)
+        input_evaluator->add(truth, input, nullptr);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("'" + job.result_frames[k] + "': " + e.what());
+    }
+    scores.names.push_back(fileName(job.gt_frames[k]));
+  }
+  scores.metrics = result_evaluator.metrics();
+  if (job.has_input)
+    scores.input_metrics = std::make_unique<SequenceMetrics>(input_evaluator->metrics());
+  return scores;
+}
+
+void
+printScoresJson(const GroundTruthScores& scores)
+{
+  std::string text = toJson(scores.metrics, scores.names);
+  text.pop_back(); // closing brace
+  text += ", \"width\": " + std::to_string(scores.width) + ", \"height\": " + std::to_string(scores.height);
+  if (scores.input_metrics)
+    text += ", \"input\": " + toJson(*scores.input_metrics);
+  std::cout << text << "}" << std::endl;
+}
+
+/// The table: a row per frame, the sequence's total, the input's, then the temporal figures.
+void
+printScoresTable(const GroundTruthScores& scores)
+{
+  const SequenceMetrics& metrics = scores.metrics;
+  const std::unique_ptr<SequenceMetrics>& input_metrics = scores.input_metrics;
+  std::cout << metricsTableHeader() << "\n";
+  const bool sequence = metrics.frames.size() > 1;
+  for (std::size_t k = 0; k < metrics.frames.size(); ++k)
+    std::cout << metricsTableRow(scores.names[k], metrics.frames[k]) << "\n";
+  if (sequence)
+    std::cout << metricsTableRow("all " + std::to_string(metrics.frames.size()) + " frames", metrics.total) << "\n";
+  if (input_metrics)
+    std::cout << metricsTableRow(sequence ? "input, all frames" : "input", input_metrics->total) << "\n";
+  if (sequence) {
+    std::cout << secondaryLine("temporal std", metrics.temporal_std, metrics.temporal_pixels, "static pixels",
+                               input_metrics.get(), input_metrics ? input_metrics->temporal_std : 0.0)
+              << "\n";
+    std::cout << secondaryLine("moving-edge RMSE", metrics.moving_edge_rmse, metrics.moving_edge_pixels,
+                               "pixel-frames", input_metrics.get(),
+                               input_metrics ? input_metrics->moving_edge_rmse : 0.0)
+              << "\n";
+  }
+  std::cout << std::flush;
+}
+
+int
+run(int argc, char** argv)
+{
+  const PlanarRegionOptions planar;
+  po::options_description options("Options");
+  addOptions(options, planar);
   po::options_description hidden;
   hidden.add_options()("paths", po::value<std::vector<std::string>>(), "positional arguments");
   po::options_description all;
@@ -321,116 +476,12 @@ run(int argc, char** argv)
       throw UsageError("--gt, --result and --input belong to the ground-truth mode, not to --raw or --jitter");
     return vm.count("raw") ? runPlanar(vm, paths, vm.count("json") > 0) : runJitter(vm, paths, vm.count("json") > 0);
   }
-  // Ground-truth mode: GT and RESULT as the two positional arguments or as options.
-  std::size_t next = 0;
-  std::string gt_path, result_path;
-  if (vm.count("gt"))
-    gt_path = vm["gt"].as<std::string>();
-  else if (next < paths.size())
-    gt_path = paths[next++];
-  if (vm.count("result"))
-    result_path = vm["result"].as<std::string>();
-  else if (next < paths.size())
-    result_path = paths[next++];
-  if (next < paths.size())
-    throw UsageError("unexpected argument '" + paths[next] + "' (expected GT and RESULT)");
-  if (gt_path.empty() || result_path.empty())
-    throw UsageError("expected GT and RESULT");
-  const std::string input_path = vm.count("input") ? vm["input"].as<std::string>() : std::string();
-  const bool has_input = !input_path.empty();
-  const bool json = vm.count("json") > 0;
-
-  std::error_code ec;
-  auto checkExists = [&](const std::string& path) {
-    if (!fs::exists(path, ec))
-      throw InputError("'" + path + "': no such file or directory");
-  };
-  checkExists(gt_path);
-  checkExists(result_path);
-  if (has_input)
-    checkExists(input_path);
-  const bool directory = fs::is_directory(gt_path, ec);
-  auto checkKind = [&](const std::string& path) {
-    if (fs::is_directory(path, ec) != directory)
-      throw InputError("'" + path + "' is a " + (directory ? "file" : "directory") + " but the ground truth '" +
-                       gt_path + "' is a " + (directory ? "directory" : "file"));
-  };
-  checkKind(result_path);
-  if (has_input)
-    checkKind(input_path);
-
-  const std::vector<std::string> gt_frames = framesOf(gt_path, directory);
-  const std::vector<std::string> result_frames = framesOf(result_path, directory);
-  std::vector<std::string> input_frames;
-  if (directory)
-    checkSameFrames(gt_frames, result_frames, gt_path, result_path);
-  if (has_input) {
-    input_frames = framesOf(input_path, directory);
-    if (directory)
-      checkSameFrames(gt_frames, input_frames, gt_path, input_path);
-  }
-
-  SequenceEvaluator result_evaluator;
-  std::unique_ptr<SequenceEvaluator> input_evaluator;
-  if (has_input)
-    input_evaluator = std::make_unique<SequenceEvaluator>();
-  std::vector<std::string> names;
-  unsigned width = 0, height = 0;
-  for (std::size_t k = 0; k < gt_frames.size(); ++k) {
-    const pcl::PointCloud<pcl::PointNormal> truth = loadTruth(gt_frames[k]);
-    if (k == 0) {
-      width = truth.width;
-      height = truth.height;
-    } else if (truth.width != width || truth.height != height) {
-      throw InputError("'" + gt_frames[k] + "': frame is " + std::to_string(truth.width) + " x " +
-                       std::to_string(truth.height) + " but the sequence is " + std::to_string(width) + " x " +
-                       std::to_string(height));
-    }
-    const pcl::PointCloud<pcl::PointXYZ> result = loadXyz(result_frames[k], truth, gt_frames[k]);
-    pcl::PointCloud<pcl::PointXYZ> input;
-    if (has_input)
-      input = loadXyz(input_frames[k], truth, gt_frames[k]);
-    try {
-      result_evaluator.add(truth, result, has_input ? &input : nullptr);
-      if (has_input)
-        input_evaluator->add(truth, input, nullptr);
-    } catch (const std::invalid_argument& e) {
-      throw InputError("'" + result_frames[k] + "': " + e.what());
-    }
-    names.push_back(fileName(gt_frames[k]));
-  }
-  const SequenceMetrics metrics = result_evaluator.metrics();
-  std::unique_ptr<SequenceMetrics> input_metrics;
-  if (has_input)
-    input_metrics = std::make_unique<SequenceMetrics>(input_evaluator->metrics());
-
-  if (json) {
-    std::string text = toJson(metrics, names);
-    text.pop_back(); // closing brace
-    text += ", \"width\": " + std::to_string(width) + ", \"height\": " + std::to_string(height);
-    if (input_metrics)
-      text += ", \"input\": " + toJson(*input_metrics);
-    std::cout << text << "}" << std::endl;
-    return 0;
-  }
-  std::cout << metricsTableHeader() << "\n";
-  const bool sequence = metrics.frames.size() > 1;
-  for (std::size_t k = 0; k < metrics.frames.size(); ++k)
-    std::cout << metricsTableRow(names[k], metrics.frames[k]) << "\n";
-  if (sequence)
-    std::cout << metricsTableRow("all " + std::to_string(metrics.frames.size()) + " frames", metrics.total) << "\n";
-  if (input_metrics)
-    std::cout << metricsTableRow(sequence ? "input, all frames" : "input", input_metrics->total) << "\n";
-  if (sequence) {
-    std::cout << secondaryLine("temporal std", metrics.temporal_std, metrics.temporal_pixels, "static pixels",
-                               input_metrics.get(), input_metrics ? input_metrics->temporal_std : 0.0)
-              << "\n";
-    std::cout << secondaryLine("moving-edge RMSE", metrics.moving_edge_rmse, metrics.moving_edge_pixels,
-                               "pixel-frames", input_metrics.get(),
-                               input_metrics ? input_metrics->moving_edge_rmse : 0.0)
-              << "\n";
-  }
-  std::cout << std::flush;
+  const GroundTruthJob job = groundTruthJobFrom(vm, paths);
+  const GroundTruthScores scores = score(job);
+  if (job.json)
+    printScoresJson(scores);
+  else
+    printScoresTable(scores);
   return 0;
 }
 

@@ -25,11 +25,10 @@ const char* const kUsage =
     "DIR/truth/frame_0000.pcd ... (PointNormal: exact points and normals). Lengths in metres.\n"
     "Same options and seed, same files.";
 
-int
-run(int argc, char** argv)
+/// The options, with the defaults of `d`.
+void
+addOptions(po::options_description& options, const SceneOptions& d)
 {
-  const SceneOptions d;
-  po::options_description options("Options");
   // clang-format off
   options.add_options()
     ("help,h", "print this help")
@@ -94,13 +93,12 @@ run(int argc, char** argv)
     ("seed", po::value<std::uint64_t>()->default_value(d.seed), "seed of the noise, dropouts and stripe phases")
     ("quiet,q", "print nothing but errors");
   // clang-format on
-  po::positional_options_description positional;
-  po::variables_map vm;
-  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
-    return 0;
-  if (!vm.count("output-dir"))
-    throw UsageError("--output-dir is required");
+}
 
+/// The scene, camera and noise of the options, validated (UsageError naming the problem).
+SceneOptions
+sceneOptionsFrom(const po::variables_map& vm)
+{
   SceneOptions o;
   try {
     o.scene = sceneTypeFromString(vm["scene"].as<std::string>());
@@ -149,13 +147,18 @@ run(int argc, char** argv)
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  return o;
+}
 
-  const std::string out_dir = vm["output-dir"].as<std::string>();
+/// Renders the frames of `o` into OUT_DIR/noisy and OUT_DIR/truth, with progress and (unless
+/// `quiet`) a closing line.
+void
+writeFrames(const SceneOptions& o, const std::string& out_dir, bool quiet)
+{
   const std::string noisy_dir = joinPath(out_dir, "noisy"), truth_dir = joinPath(out_dir, "truth");
   prepareOutputDirectory("", noisy_dir, false);
   prepareOutputDirectory("", truth_dir, false);
 
-  const bool quiet = vm.count("quiet") > 0;
   Progress progress("range_nlm_synth", std::size_t(o.frames), 1, !quiet);
   const auto start = std::chrono::steady_clock::now();
   // Zero-padded to at least 4 digits and to the largest index, so name order is frame order.
@@ -175,6 +178,21 @@ run(int argc, char** argv)
               << o.height << " (scene " << toString(o.scene) << ", noise " << toString(o.noise) << " x "
               << o.effectiveNoiseScale() << ", " << toString(o.motion) << ") to " << noisy_dir << " and "
               << truth_dir << " in " << static_cast<long>(millisecondsSince(start)) << " ms" << std::endl;
+}
+
+int
+run(int argc, char** argv)
+{
+  po::options_description options("Options");
+  addOptions(options, SceneOptions());
+  po::positional_options_description positional;
+  po::variables_map vm;
+  if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
+    return 0;
+  if (!vm.count("output-dir"))
+    throw UsageError("--output-dir is required");
+  const SceneOptions o = sceneOptionsFrom(vm);
+  writeFrames(o, vm["output-dir"].as<std::string>(), vm.count("quiet") > 0);
   return 0;
 }
 
