@@ -3,6 +3,7 @@
 #pragma once
 
 #include <range_nlm/core/pipeline.h>
+#include <range_nlm/grid_adaptor.h>
 #include <range_nlm/parameters.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
 
@@ -95,33 +96,46 @@ public:
   /// One entry per frame returned by the last push() or flush(), in the same order.
   const std::vector<OutputInfo>& lastOutputs() const { return last_outputs_; }
   /// Told where each phase of every filter run begins and ends (see StageObserver); not owned.
-  void setStageObserver(StageObserver* observer) { filter_.setStageObserver(observer); }
+  void setStageObserver(StageObserver* observer) { workspace_.setStageObserver(observer); }
 
 private:
+  /// A frame of the window with its grid, converted once, when a window first needs it.
+  struct HeldFrame
+  {
+    CloudConstPtr cloud;
+    bool wanted = true; // whether the frame is to be filtered
+    bool converted = false;
+    Grid grid;
+  };
+
   CloudPtr filterAt(std::size_t t);
+  /// Frame t's grid, converted on first use; `position` is its index in the window being filtered
+  /// (for the error message).
+  const Grid& gridOf(std::size_t t, std::size_t position);
+  /// Recursive mode: frame t enters the history, with the last run's output as where its pixels'
+  /// histories start if `filtered`.
+  void remember(std::size_t t, bool filtered);
   void dropBefore(std::size_t t);
 
   int radius_;
   bool causal_;
   bool recursive_ = false;
   RunningAverage history_; // recursive mode: the running average of the frames so far
-  CloudPtr history_cloud_; // recursive mode: history_ as a neighbour frame
-  Grid history_grid_;      // recursive mode: the frame entering the history
-  Grid start_grid_;        // recursive mode: its filtered output, where a pixel's history starts
+  Grid start_grid_;        // recursive mode: the filtered output, where a pixel's history starts
   /// 1 / weight of the newest frame in the history: 2r + 1, the centred window's frame count.
   int historyLength() const;
   FilterParameters parameters_;
-  std::deque<CloudConstPtr> window_; // frames first_ .. first_ + size - 1
-  std::deque<bool> wanted_;          // whether each frame of window_ is to be filtered
-  std::size_t first_ = 0;            // sequence index of window_.front()
+  std::deque<HeldFrame> window_; // frames first_ .. first_ + size - 1
+  Grid spare_grid_;              // the storage of a dropped frame's grid, for the next frame
+  std::size_t first_ = 0;        // sequence index of window_.front()
   std::uint32_t width_ = 0, height_ = 0; // size of the first frame pushed
   std::size_t pushed_ = 0;
   std::size_t emitted_ = 0;
   std::vector<float> last_weights_;
   Bandwidths last_bandwidths_;
   std::vector<OutputInfo> last_outputs_;
-  /// One filter for the whole sequence, so that its buffers are reused from frame to frame.
-  TemporalNonLocalMeansFilter<PointT> filter_;
+  /// One workspace for the whole sequence, so that its buffers are reused from frame to frame.
+  FilterWorkspace workspace_;
 };
 
 /// Batch form: filters a whole sequence with the same windows as TemporalStream.

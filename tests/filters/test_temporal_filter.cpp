@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <string>
@@ -158,6 +159,61 @@ TEST(TemporalFilter, StreamingEqualsBatchAndDirectCalls)
     Cloud out;
     f.filter(out);
     EXPECT_EQ(maxDistance(out, *batch[t]), 0.0) << t;
+  }
+}
+
+namespace
+{
+/// Every point of `a` and `b` holds the same bytes.
+bool
+sameBits(const Cloud& a, const Cloud& b)
+{
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(pcl::PointXYZ)) == 0;
+}
+} // namespace
+
+// The stream gives, to the bit, what the temporal filter gives on the same window: the frames
+// t - 1 .. t + 1 (centred) or t - 1 .. t (causal), and in recursive mode the history and frame
+// t, the history being the running average (updateRunningAverage) of the frames so far, each
+// started from its filtered output, as a cloud.
+TEST(TemporalFilter, StreamEqualsTheFilterOnTheSameWindowToTheBit)
+{
+  const auto frames = sequence(5, 1, 0.003, 40);
+  const FilterParameters p = FilterParameters::recommended();
+  auto filterWindow = [&p](const std::deque<Cloud::ConstPtr>& window, std::size_t current) {
+    TemporalNonLocalMeansFilter<pcl::PointXYZ> f;
+    f.setParameters(p);
+    f.setFrames(window, current);
+    Cloud out;
+    f.filter(out);
+    return out;
+  };
+  for (TemporalWindow mode : {TemporalWindow::centred, TemporalWindow::causal}) {
+    const auto out = filterSequence<pcl::PointXYZ>(frames, 1, mode, p);
+    ASSERT_EQ(out.size(), frames.size());
+    for (std::size_t t = 0; t < frames.size(); ++t) {
+      const std::size_t lo = t == 0 ? 0 : t - 1;
+      const std::size_t hi = mode == TemporalWindow::causal ? t : std::min(frames.size() - 1, t + 1);
+      const std::deque<Cloud::ConstPtr> window(frames.begin() + lo, frames.begin() + hi + 1);
+      EXPECT_TRUE(sameBits(*out[t], filterWindow(window, t - lo))) << "frame " << t;
+    }
+  }
+  const auto out = filterSequence<pcl::PointXYZ>(frames, 1, TemporalWindow::recursive, p);
+  ASSERT_EQ(out.size(), frames.size());
+  RunningAverage history;
+  const Viewpoint origin{0.0f, 0.0f, 0.0f};
+  for (std::size_t t = 0; t < frames.size(); ++t) {
+    std::deque<Cloud::ConstPtr> window;
+    if (!history.empty()) {
+      Cloud::Ptr average(new Cloud);
+      fromGrid(*frames[t], history.average, *average);
+      window.push_back(average);
+    }
+    window.push_back(frames[t]);
+    const Cloud expected = filterWindow(window, window.size() - 1);
+    EXPECT_TRUE(sameBits(*out[t], expected)) << "frame " << t;
+    const Grid frame = toGrid(*frames[t]), start = toGrid(expected);
+    updateRunningAverage(history, frame, &start, origin, 3, p.search_window, p.bandwidth_samples, p.seed, p.threads);
   }
 }
 
@@ -351,7 +407,7 @@ TEST(TemporalFilter, TemporalNoiseRatioIsSmallForIndependentNoiseAndLargeForCorr
   const FilterParameters p = FilterParameters::recommended();
   auto ratioOf = [&](NoiseModel noise) {
     const std::vector<SyntheticFrame> seq = staticScene(noise, 2, 160, 120);
-    const Grid a = detail::toGrid(seq[0].noisy), b = detail::toGrid(seq[1].noisy);
+    const Grid a = toGrid(seq[0].noisy), b = toGrid(seq[1].noisy);
     NormalField n; // the true normals: the ratio is about the noise, not about normal estimation
     for (const auto& q : seq[0].truth) {
       n.nx.push_back(q.normal_x);

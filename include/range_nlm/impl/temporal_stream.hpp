@@ -1,6 +1,6 @@
 #pragma once
 
-#include <range_nlm/impl/temporal_nonlocal_means_filter.hpp>
+#include <range_nlm/impl/grid_adaptor.hpp>
 #include <range_nlm/temporal_stream.h>
 
 #include <algorithm>
@@ -8,6 +8,8 @@
 #include <chrono>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace range_nlm
 {
@@ -31,78 +33,93 @@ TemporalStream<PointT>::historyLength() const
 }
 
 template <typename PointT>
+const Grid&
+TemporalStream<PointT>::gridOf(std::size_t t, std::size_t position)
+{
+  HeldFrame& held = window_[t - first_];
+  if (!held.converted) {
+    const std::string what = "frame " + std::to_string(position) + " of the temporal window";
+    toGrid(*held.cloud, held.grid, what.c_str());
+    held.converted = true;
+  }
+  return held.grid;
+}
+
+template <typename PointT>
+void
+TemporalStream<PointT>::remember(std::size_t t, bool filtered)
+{
+  if (!recursive_ || radius_ == 0)
+    return;
+  const HeldFrame& held = window_[t - first_];
+  if (filtered) {
+    // The output as its cloud reads back: a point with a non-finite coordinate is invalid.
+    start_grid_ = workspace_.result().output;
+    start_grid_.updateValidity();
+  }
+  const PointCloud& frame = *held.cloud;
+  const Viewpoint viewpoint{frame.sensor_origin_[0], frame.sensor_origin_[1], frame.sensor_origin_[2]};
+  updateRunningAverage(history_, held.grid, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(),
+                       parameters_.search_window, parameters_.bandwidth_samples, parameters_.seed,
+                       parameters_.threads);
+}
+
+template <typename PointT>
 typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
   last_outputs_.emplace_back();
-  const CloudConstPtr& frame = window_[t - first_];
+  const CloudConstPtr& frame = window_[t - first_].cloud;
   if (recursive_ && !frame) { // a gap: the frames after it start a new history
     history_ = RunningAverage();
-    history_cloud_.reset();
     return nullptr;
   }
-  // Recursive mode: frame t enters the history once it has been filtered with the history so far.
-  auto remember = [this, &frame](const PointCloud* filtered) {
-    if (!recursive_ || radius_ == 0)
-      return;
-    toGrid(*frame, history_grid_, "frame");
-    if (filtered)
-      toGrid(*filtered, start_grid_, "output");
-    const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
-    updateRunningAverage(history_, history_grid_, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(),
-                         parameters_.search_window, parameters_.bandwidth_samples, parameters_.seed,
-                         parameters_.threads);
-    if (!history_cloud_)
-      history_cloud_.reset(new PointCloud);
-    fromGrid(*frame, history_.average, *history_cloud_);
-  };
-  if (!wanted_[t - first_] && !recursive_)
+  if (!window_[t - first_].wanted && !recursive_)
     return nullptr;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&start] {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   };
-  const std::size_t lo = t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0;
-  const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
-  std::deque<CloudConstPtr> frames;
+  // Recursive mode: the history (once there is one) and frame t; else frames lo .. hi.
+  std::vector<const Grid*> grids;
   std::size_t current = 0;
   if (recursive_) {
-    if (history_cloud_ && !history_.empty())
-      frames.push_back(history_cloud_);
-    current = frames.size();
-    frames.push_back(frame);
+    if (!history_.empty())
+      grids.push_back(&history_.average);
+    current = grids.size();
+    grids.push_back(&gridOf(t, current));
   } else {
-    for (std::size_t k = std::max(lo, first_); k <= hi; ++k) {
-      if (!window_[k - first_])
+    const std::size_t lo = std::max(t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0, first_);
+    const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
+    for (std::size_t k = lo; k <= hi; ++k)
+      if (!window_[k - first_].cloud)
         throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null but frame " +
                                     std::to_string(t) + " is to be filtered with it");
-      frames.push_back(window_[k - first_]);
-    }
-    current = t - std::max(lo, first_);
+    for (std::size_t k = lo; k <= hi; ++k)
+      grids.push_back(&gridOf(k, k - lo));
+    current = t - lo;
   }
-  filter_.setParameters(parameters_);
-  filter_.setFrames(frames, current);
+  const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
   CloudPtr out(new PointCloud);
   try {
-    filter_.filter(*out);
+    runFilter(grids, static_cast<int>(current), parameters_, viewpoint, {}, workspace_);
   } catch (const UnfilterableFrame& e) {
     // Passed through unchanged; a live stream must not stop at one covered or dropped frame.
-    filter_.clearFrames();
     *out = *frame;
     last_weights_.clear();
     last_bandwidths_ = Bandwidths();
     last_outputs_.back().problem = e.what();
     last_outputs_.back().milliseconds = elapsed();
-    remember(nullptr);
+    remember(t, false);
     return out;
   }
-  // The window alone decides which frames stay in memory.
-  filter_.clearFrames();
-  last_weights_ = filter_.getFrameWeights();
-  last_bandwidths_ = filter_.getFrameBandwidths()[current];
+  const FilterRun& run = workspace_.result();
+  fromGrid(*frame, run.output, *out);
+  last_weights_ = run.frame_weights;
+  last_bandwidths_ = run.bandwidths[current];
   last_outputs_.back().bandwidths = last_bandwidths_;
-  last_outputs_.back().outliers_moved = filter_.getOutliersMoved();
-  remember(out.get());
+  last_outputs_.back().outliers_moved = run.outliers_moved;
+  remember(t, true);
   last_outputs_.back().milliseconds = elapsed();
   return out;
 }
@@ -112,8 +129,9 @@ void
 TemporalStream<PointT>::dropBefore(std::size_t t)
 {
   while (!window_.empty() && first_ < t) {
+    if (window_.front().converted)
+      spare_grid_ = std::move(window_.front().grid);
     window_.pop_front();
-    wanted_.pop_front();
     ++first_;
   }
 }
@@ -147,8 +165,8 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
                                   std::to_string(height_));
     }
   }
-  window_.push_back(frame);
-  wanted_.push_back(wanted);
+  window_.push_back({frame, wanted, false, std::move(spare_grid_)});
+  spare_grid_ = Grid();
   last_outputs_.clear();
   ++pushed_;
   std::vector<CloudPtr> ready;
@@ -178,9 +196,7 @@ TemporalStream<PointT>::flush()
     dropBefore(keep_from);
   }
   window_.clear();
-  wanted_.clear();
   history_ = RunningAverage();
-  history_cloud_.reset();
   first_ = pushed_;
   return ready;
 }
