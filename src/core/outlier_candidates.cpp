@@ -12,8 +12,8 @@ namespace range_nlm
 {
 namespace
 {
-using detail::kSurroundReach;
-constexpr int kSide = 2 * kSurroundReach + 1;
+/// Side of the square of the surroundings.
+constexpr int kSide = 2 * tuned::kSurroundReach + 1;
 
 /// candidate[u] = 0 for the points of row v (inside the frame) within `smallest` (the smallest
 /// tolerance, that of the profile's smallest sigma) of two of their 8 neighbours: no outliers;
@@ -45,7 +45,7 @@ markRowCandidates(const detail::OutlierFrame& frame, int v, float smallest, std:
 struct Surroundings
 {
   bool on[kSide * kSide];
-  bool usable(int a, int b) const { return on[(b + kSurroundReach) * kSide + a + kSurroundReach]; }
+  bool usable(int a, int b) const { return on[(b + tuned::kSurroundReach) * kSide + a + tuned::kSurroundReach]; }
 };
 
 /// The Surroundings of point (u, v), and the range steps between their adjacent pixels on a
@@ -58,25 +58,25 @@ surroundingSteps(const detail::OutlierFrame& frame, int u, int v, Surroundings& 
   const int width = frame.width;
   const std::vector<float>& rho = frame.rho;
   steps.clear();
-  for (int b = -kSurroundReach; b <= kSurroundReach; ++b)
-    for (int a = -kSurroundReach; a <= kSurroundReach; ++a)
-      around.on[(b + kSurroundReach) * kSide + a + kSurroundReach] =
+  for (int b = -tuned::kSurroundReach; b <= tuned::kSurroundReach; ++b)
+    for (int a = -tuned::kSurroundReach; a <= tuned::kSurroundReach; ++a)
+      around.on[(b + tuned::kSurroundReach) * kSide + a + tuned::kSurroundReach] =
           (a != 0 || b != 0) && frame.validAt(u + a, v + b) && detail::onSurface(frame, u + a, v + b, u, v);
-  for (int b = -kSurroundReach; b <= kSurroundReach; ++b)
-    for (int a = -kSurroundReach; a <= kSurroundReach; ++a) {
+  for (int b = -tuned::kSurroundReach; b <= tuned::kSurroundReach; ++b)
+    for (int a = -tuned::kSurroundReach; a <= tuned::kSurroundReach; ++a) {
       if (!around.usable(a, b))
         continue;
       const float ra = rho[static_cast<std::size_t>(v + b) * width + u + a];
-      if (a < kSurroundReach && around.usable(a + 1, b))
+      if (a < tuned::kSurroundReach && around.usable(a + 1, b))
         steps.push_back(std::fabs(rho[static_cast<std::size_t>(v + b) * width + u + a + 1] - ra));
-      if (b < kSurroundReach && around.usable(a, b + 1))
+      if (b < tuned::kSurroundReach && around.usable(a, b + 1))
         steps.push_back(std::fabs(rho[static_cast<std::size_t>(v + b + 1) * width + u + a] - ra));
     }
 }
 
 /// Whether the valid point (u, v), index i, is a candidate: on no surface, with two valid
 /// neighbours, at least one neighbour on a surface, and farther from each of those than
-/// kSurroundSteps times the median step of its surroundings. If so, its fields into `c`.
+/// tuned::kSurroundSteps times the median step of its surroundings. If so, its fields into `c`.
 bool
 isCandidate(const detail::OutlierFrame& frame, std::size_t i, int u, int v, std::vector<float>& steps,
             detail::OutlierCandidate& c)
@@ -110,7 +110,7 @@ isCandidate(const detail::OutlierFrame& frame, std::size_t i, int u, int v, std:
   // A point within those steps of one of them is on their surface.
   if (!steps.empty()) {
     std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-    const float typical = detail::kSurroundSteps * steps[steps.size() / 2];
+    const float typical = tuned::kSurroundSteps * steps[steps.size() / 2];
     if (std::any_of(neighbours, neighbours + kept, [&](float q) { return std::fabs(q - r) <= typical; }))
       return false;
   }

@@ -33,8 +33,8 @@ chooseSide(const detail::OutlierFrame& frame, const std::vector<unsigned char>& 
   const auto usableAt = [&](int a, int b) {
     return frame.validAt(a, b) && !outlier[static_cast<std::size_t>(b) * frame.width + a];
   };
-  for (int b = -detail::kSideReach; b <= detail::kSideReach; ++b)
-    for (int a = -detail::kSideReach; a <= detail::kSideReach; ++a) {
+  for (int b = -tuned::kSideReach; b <= tuned::kSideReach; ++b)
+    for (int a = -tuned::kSideReach; a <= tuned::kSideReach; ++a) {
       // Pixels in point-symmetric pairs only: a hole on one side of the edge (a shadow) takes its
       // mirror image on the other out too.
       if ((a == 0 && b == 0) || !usableAt(c.u + a, c.v + b) || !usableAt(c.u - a, c.v - b))

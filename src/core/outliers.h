@@ -5,6 +5,7 @@
 #pragma once
 
 #include "internal.h"
+#include "tuned.h"
 
 #include <algorithm>
 #include <cstddef>
@@ -14,17 +15,6 @@ namespace range_nlm
 {
 namespace detail
 {
-/// Adjacent pairs (right and down neighbours) of the 5 x 5 window around a pixel.
-constexpr int kSurroundReach = 2;
-/// An outlier must also be farther from every neighbour on a surface than this many times the
-/// median range step between adjacent pixels of its 5 x 5 surroundings that lie on a surface.
-constexpr float kSurroundSteps = 4.0f;
-/// Reach of the surroundings that choose an outlier's side of a depth edge: 11 x 11 pixels.
-constexpr int kSideReach = 5;
-/// Smallest tolerance of "on a surface", in pixel footprints (range x the angle between adjacent
-/// rays).
-constexpr float kFootprints = 3.0f;
-
 /// What the parts of the isolated-outlier step share: the frame's ranges and the tolerance of
 /// agreement between points.
 struct OutlierFrame
@@ -44,9 +34,12 @@ struct OutlierFrame
   {
     return u >= 0 && v >= 0 && u < width && v < height && rho[static_cast<std::size_t>(v) * width + u] > 0.0f;
   }
-  /// The tolerance of agreement at range r: `sigmas` noise sigmas, at least kFootprints pixel
-  /// footprints.
-  float toleranceAt(float r) const { return std::max(sigmas * profile.sigmaAt(r), kFootprints * ray_angle * r); }
+  /// The tolerance of agreement at range r: `sigmas` noise sigmas, at least tuned::kFootprints
+  /// pixel footprints (range x the angle between adjacent rays).
+  float toleranceAt(float r) const
+  {
+    return std::max(sigmas * profile.sigmaAt(r), tuned::kFootprints * ray_angle * r);
+  }
 };
 
 /// The angle between adjacent rays: the median of |p_i - p_j| / rho_i over adjacent valid pixels
@@ -74,14 +67,17 @@ struct OutlierCandidate
 };
 
 /// The candidates among the points with `active` set (every point if empty), per row in column
-/// order, by `threads` threads with the same result.
+/// order, by `threads` threads with the same result. The surroundings whose range steps guard a
+/// candidate are the adjacent pairs (right and down neighbours) within tuned::kSurroundReach
+/// pixels of it (5 x 5), and a candidate must be farther than tuned::kSurroundSteps times their
+/// median step from every neighbour on a surface.
 std::vector<std::vector<OutlierCandidate>>
 findOutlierCandidates(const Grid& grid, const OutlierFrame& frame, const std::vector<unsigned char>& active,
                       int threads);
 
 /// Each candidate with the range it moves to, in the order of `rows`: the median of its ring, or,
-/// where the ring lies on two sides of a depth edge, of the side most of its 11 x 11 surroundings
-/// are nearer to.
+/// where the ring lies on two sides of a depth edge, of the side most of its surroundings within
+/// tuned::kSideReach pixels (11 x 11) are nearer to.
 std::vector<IsolatedPoint>
 voteSides(const OutlierFrame& frame, const std::vector<std::vector<OutlierCandidate>>& rows);
 

@@ -36,7 +36,12 @@
   X(kStructuredDeviation, double, 1.5, "generated", "structured: a shift raises the mean deviation 1.5x")             \
   X(kShiftedDeviation, double, 0.8, "generated", "shows a shift: a shift lowers it to 0.8x")                          \
   X(kMinStructuredBlocks, int, 8, "generated", "the structure test needs 8 structured blocks")                        \
-  X(kStructuredPerShifted, int, 4, "generated", "motion if 1 in 4 structured blocks shows a shift")
+  X(kStructuredPerShifted, int, 4, "generated", "motion if 1 in 4 structured blocks shows a shift")                   \
+  X(kSurroundReach, int, 2, "generated", "outliers: the range-step guard's surroundings, 5 x 5 pixels")               \
+  X(kSurroundSteps, float, 4.0f, "generated", "outliers: farther than 4 median steps of the surroundings")            \
+  X(kSideReach, int, 5, "generated", "outliers: the side vote's surroundings, 11 x 11 pixels")                        \
+  X(kFootprints, float, 3.0f, "generated", "outliers: 'on a surface' within at least 3 pixel footprints")             \
+  X(kHistoryChangeSigmas, float, 2.0f, "generated", "history starts over below the filter's 3 sigmas of change")
 
 #define RANGE_NLM_TUNED_NUMBERS(X)                                                                                    \
   RANGE_NLM_TUNED_PIPELINE(X)                                                                                         \
