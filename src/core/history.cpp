@@ -1,5 +1,6 @@
 // The history of the recursive temporal window: a motion-aware running average of the input frames.
 #include "internal.h"
+#include "tuned.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,13 +13,6 @@ namespace range_nlm
 
 namespace
 {
-/// Frame-to-frame sigmas beyond which a pixel's history starts over. Lower than the filter's own
-/// test of change (detail::kChangeSigmas, 3): a history that starts over needlessly starts from the
-/// filtered frame, which costs little, but one that averages a surface that moved keeps it where
-/// it was (a box moving across the view 10 mm per frame under time-of-flight noise: flat RMSE
-/// 0.409 mm at 2 sigmas, 0.522 at 3, 0.466 for the frames filtered alone).
-constexpr float kHistoryChangeSigmas = 2.0f;
-
 /// Pixel i's history starts over from start's point (counted as `started` frames) where start has
 /// one, else from the frame's (counted as 1); it is empty where the frame has no point.
 void
@@ -99,9 +93,12 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   std::size_t counted = 0;
   const float median = detail::medianOfNonNegative(ratios.data(), nullptr, n, threads, &counted);
   const float ratio = counted >= 64 ? std::max(1.0f, 1.4826f * median) : 1.0f;
+  // The history starts over at fewer frame-to-frame sigmas than the filter's own test of change
+  // (detail::kChangeSigmas): a history that starts over needlessly starts from the filtered frame,
+  // which costs little, but one that averages a surface that moved keeps it where it was.
   std::vector<unsigned char> changed;
-  detail::markChangedPixels(along, frame.width, frame.height, noise.data(), kHistoryChangeSigmas * ratio, threads,
-                            changed);
+  detail::markChangedPixels(along, frame.width, frame.height, noise.data(), tuned::kHistoryChangeSigmas * ratio,
+                            threads, changed);
   Grid& h = history.average;
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i) {

@@ -5,6 +5,8 @@
 
 #include <range_nlm/core/pipeline.h>
 
+#include "robust_statistics.h"
+
 #include <vector>
 
 namespace range_nlm
@@ -73,17 +75,6 @@ correctIsolatedPoints(Grid& grid, const NoiseProfile& profile, float sigmas, con
 /// framesMoved by `threads` threads, with the same result.
 bool
 framesMoved(const Grid& a, const NormalField& normals_a, const Grid& b, int threads);
-/// The median (the value at rank count / 2 from 0, as std::nth_element finds it) of the count
-/// values[i] >= 0 with mask[i] set (every i if mask is null) among n, by `threads` threads; NaN
-/// if there is none. `count` (if given) receives that count.
-float
-medianOfNonNegative(const float* values, const unsigned char* mask, std::size_t n, int threads,
-                    std::size_t* count = nullptr);
-/// The mean of the smallest 80 % of `values` (non-negative; reordered): robust to depth edges, and
-/// unlike a median not stuck on the steps of a quantized depth unit. 0 for fewer than two values.
-/// (The noise correlation's statistic, estimateNoiseCorrelation.)
-float
-robustMean(std::vector<float>& values);
 /// framesMoved and estimateTemporalNoiseRatio of one pair of frames in one pass over them.
 struct FrameComparison
 {

@@ -49,7 +49,27 @@
 
 /// Numbers of the frame estimates (noise profile, noise correlation, frame change, history) and
 /// of the isolated-outlier step.
-#define RANGE_NLM_TUNED_ESTIMATES(X)
+#define RANGE_NLM_TUNED_ESTIMATES(X)                                                                                  \
+  X(kProfileSamplesPerBin, int, 64, "generated", "one noise-profile range bin per 64 sampled windows")                \
+  X(kProfileMaxBins, int, 8, "generated", "at most 8 noise-profile range bins")                                       \
+  X(kRobustMeanKeptFifths, int, 4, "generated", "noise correlation: mean of the smallest 4/5, robust to edges")       \
+  X(kNoiseCorrelationLags, int, 8, "derived", "lags 1..8 px, one per NoiseCorrelation::scale")                        \
+  X(kNoiseCorrelationMinTriples, int, 64, "derived", "a lag's scale needs 64 pixel triples")                          \
+  X(kMotionBlocksAcross, int, 20, "generated", "blocks of width/20 px hold many noise blobs each")                    \
+  X(kMotionMinBlockSize, int, 8, "derived", "blocks of at least 8 x 8 px in small frames")                            \
+  X(kMotionMinBlocks, int, 4, "derived", "fewer blocks cannot tell motion from noise")                                \
+  X(kNoiseRatioMinPixels, int, 64, "derived", "the noise ratio needs 64 pixels, else 0")                              \
+  X(kDriftMinBlocks, int, 24, "generated", "fewer blocks cannot tell a quadratic drift from motion")                  \
+  X(kDriftHuberSpreads, double, 2.0, "generated", "Huber weights of the drift fit from 2 spreads")                    \
+  X(kStructuredDeviation, double, 1.5, "generated", "structured: a shift raises the mean deviation 1.5x")             \
+  X(kShiftedDeviation, double, 0.8, "generated", "shows a shift: a shift lowers it to 0.8x")                          \
+  X(kMinStructuredBlocks, int, 8, "generated", "the structure test needs 8 structured blocks")                        \
+  X(kStructuredPerShifted, int, 4, "generated", "motion if 1 in 4 structured blocks shows a shift")                   \
+  X(kSurroundReach, int, 2, "generated", "outliers: the range-step guard's surroundings, 5 x 5 pixels")               \
+  X(kSurroundSteps, float, 4.0f, "generated", "outliers: farther than 4 median steps of the surroundings")            \
+  X(kSideReach, int, 5, "generated", "outliers: the side vote's surroundings, 11 x 11 pixels")                        \
+  X(kFootprints, float, 3.0f, "generated", "outliers: 'on a surface' within at least 3 pixel footprints")             \
+  X(kHistoryChangeSigmas, float, 2.0f, "generated", "history starts over below the filter's 3 sigmas of change")
 
 #define RANGE_NLM_TUNED_NUMBERS(X)                                                                                    \
   RANGE_NLM_TUNED_PIPELINE(X)                                                                                         \

@@ -1,0 +1,238 @@
+// The range-adaptive noise profile (docs/method.md, "Automatic bandwidths"): the noise sigma and
+// the window extent of sampled windows, binned by range, and their interpolation at any range.
+#include "internal.h"
+#include "robust_statistics.h"
+#include "tuned.h"
+
+#include <pcl/common/eigen.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+
+namespace range_nlm
+{
+namespace
+{
+/// The profile (xs, ys) at x: linear between its ranges, constant beyond its ends; 0 if empty.
+float
+interpolate(const std::vector<float>& xs, const std::vector<float>& ys, float x)
+{
+  if (xs.empty())
+    return 0.0f;
+  if (x <= xs.front())
+    return ys.front();
+  if (x >= xs.back())
+    return ys.back();
+  const auto it = std::upper_bound(xs.begin(), xs.end(), x);
+  const std::size_t hi = static_cast<std::size_t>(it - xs.begin()), lo = hi - 1;
+  const float t = (x - xs[lo]) / std::max(xs[hi] - xs[lo], 1e-30f);
+  return ys[lo] + t * (ys[hi] - ys[lo]);
+}
+
+/// detail::interpolateProfile, with the second profile (ys2, out2) if Second (then both non-null).
+template <bool Second>
+void
+interpolateProfiles(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                    std::size_t n, const std::vector<float>* ys2, float* out2)
+{
+  // interpolate() for a block of points at a time, branch-free so that it vectorizes: the bin
+  // [xs[lo], xs[lo + 1]] of x is found by a scan over the (strictly increasing) ranges instead of
+  // a binary search per point, and the same arithmetic follows. A second profile over the same
+  // ranges (ys2) shares the scan.
+  const std::size_t bins = xs.size();
+  const float front = xs.front(), back = xs.back();
+  const std::vector<float>& zs = Second ? *ys2 : ys;
+  constexpr std::size_t kBlock = 256;
+  // The bin's ends as bits, chosen with masks (GCC turns a select into a branch here).
+  std::uint32_t xl[kBlock], xh[kBlock], yl[kBlock], yh[kBlock], zl[kBlock], zh[kBlock];
+  const auto bits = [](float f) { return __builtin_bit_cast(std::uint32_t, f); };
+  const auto value = [](std::uint32_t b) { return __builtin_bit_cast(float, b); };
+  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+    const int m = static_cast<int>(std::min(kBlock, n - i0));
+    const float* __restrict xv = x + i0;
+    // The profile (xs, v) at the block's points into o, from the chosen bins' values lo, hi.
+    const auto finish = [&](const std::vector<float>& v, const std::uint32_t* lo, const std::uint32_t* hi,
+                            float* __restrict o) {
+      const float first = v.front(), last = v.back();
+      for (int i = 0; i < m; ++i) {
+        const float lx = value(xl[i]), ly = value(lo[i]), hx = value(xh[i]), hy = value(hi[i]);
+        const float gap = hx - lx;
+        const float t = (xv[i] - lx) / (gap < 1e-30f ? 1e-30f : gap);
+        const float mid = bins == 1 ? first : ly + t * (hy - ly);
+        o[i] = xv[i] <= front ? first : (xv[i] >= back ? last : mid);
+      }
+    };
+    const std::size_t next = bins > 1 ? 1 : 0;
+    for (int i = 0; i < m; ++i) {
+      xl[i] = bits(xs[0]), xh[i] = bits(xs[next]), yl[i] = bits(ys[0]), yh[i] = bits(ys[next]);
+      if (Second)
+        zl[i] = bits(zs[0]), zh[i] = bits(zs[next]);
+    }
+    for (std::size_t b = 1; b + 1 < bins; ++b) {
+      const float xb = xs[b];
+      const std::uint32_t bxb = bits(xb), byb = bits(ys[b]), bzb = bits(zs[b]);
+      const std::uint32_t bxn = bits(xs[b + 1]), byn = bits(ys[b + 1]), bzn = bits(zs[b + 1]);
+      for (int i = 0; i < m; ++i) {
+        const std::uint32_t past = 0u - static_cast<std::uint32_t>(xb <= xv[i]);
+        xl[i] = (bxb & past) | (xl[i] & ~past), xh[i] = (bxn & past) | (xh[i] & ~past);
+        yl[i] = (byb & past) | (yl[i] & ~past), yh[i] = (byn & past) | (yh[i] & ~past);
+        if (Second)
+          zl[i] = (bzb & past) | (zl[i] & ~past), zh[i] = (bzn & past) | (zh[i] & ~past);
+      }
+    }
+    finish(ys, yl, yh, out + i0);
+    if (Second)
+      finish(zs, zl, zh, out2 + i0);
+  }
+}
+} // namespace
+
+void
+detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                           std::size_t n, const std::vector<float>* ys2, float* out2)
+{
+  const bool second = ys2 && out2;
+  if (xs.empty()) {
+    std::fill(out, out + n, 0.0f);
+    if (second)
+      std::fill(out2, out2 + n, 0.0f);
+    return;
+  }
+  if (second)
+    interpolateProfiles<true>(xs, ys, x, out, n, ys2, out2);
+  else
+    interpolateProfiles<false>(xs, ys, x, out, n, nullptr, nullptr);
+}
+
+float
+NoiseProfile::sigmaAt(float rho) const
+{
+  return interpolate(range, sigma, rho);
+}
+
+float
+NoiseProfile::extentAt(float rho) const
+{
+  return interpolate(range, extent, rho);
+}
+
+NoiseProfile
+estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                     const Viewpoint& viewpoint)
+{
+  return detail::estimateNoiseProfile(grid, search_window, samples, seed, viewpoint, 1);
+}
+
+NoiseProfile
+detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
+                             const Viewpoint& viewpoint, int threads)
+{
+  // The samples are the valid points of ranks rng() % valid, in index order. Valid points are
+  // counted per chunk of 64 pixels (a vectorized sum), and each rank is found in its chunk.
+  constexpr std::size_t kChunk = 64;
+  const std::size_t n = grid.size(), chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::uint32_t> before(chunks + 1, 0u); // valid points before each chunk
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const unsigned char* __restrict v = grid.valid.data() + c * kChunk;
+    const std::size_t m = std::min(kChunk, n - c * kChunk);
+    std::uint32_t count = 0;
+    for (std::size_t i = 0; i < m; ++i)
+      count += v[i] != 0;
+    before[c + 1] = before[c] + count;
+  }
+  const std::uint64_t valid_count = before[chunks];
+  if (valid_count == 0)
+    throw UnfilterableFrame("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
+  const auto validOfRank = [&](std::uint64_t rank) {
+    const std::size_t c =
+        static_cast<std::size_t>(std::upper_bound(before.begin(), before.end(), rank) - before.begin()) - 1;
+    std::uint64_t left = rank - before[c];
+    std::size_t i = c * kChunk;
+    for (;; ++i)
+      if (grid.valid[i] && left-- == 0)
+        return static_cast<int>(i);
+  };
+  std::mt19937_64 rng(seed);
+  // At least the 3 x 3 neighbourhood: a plane fit needs 4 points, and a 1 x 1 search window (which
+  // moves nothing) must not make the noise estimate impossible.
+  const int r = std::max(1, search_window / 2);
+  struct Sample
+  {
+    float rho, sigma, extent;
+  };
+  // The samples are drawn in order, then evaluated in parallel, each into its own slot; the
+  // slots of windows that qualify are kept in sample order.
+  std::vector<int> picked(static_cast<std::size_t>(std::max(samples, 0)));
+  for (int& k : picked)
+    k = validOfRank(rng() % valid_count);
+  std::vector<Sample> slots(picked.size());
+  std::vector<unsigned char> kept(picked.size(), 0);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
+  for (int s = 0; s < samples; ++s) {
+    const int k = picked[s];
+    const int u = k % grid.width, v = k / grid.width;
+    double sum[3] = {0, 0, 0}, sq[6] = {0, 0, 0, 0, 0, 0}, max_dist2 = 0.0;
+    int count = 0;
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        const int j = jv * grid.width + ju;
+        if (!grid.valid[j])
+          continue;
+        const double qx = double(grid.x[j]) - grid.x[k], qy = double(grid.y[j]) - grid.y[k],
+                     qz = double(grid.z[j]) - grid.z[k];
+        sum[0] += qx, sum[1] += qy, sum[2] += qz;
+        sq[0] += qx * qx, sq[1] += qx * qy, sq[2] += qx * qz, sq[3] += qy * qy, sq[4] += qy * qz, sq[5] += qz * qz;
+        max_dist2 = std::max(max_dist2, qx * qx + qy * qy + qz * qz);
+        ++count;
+      }
+    if (count < 4)
+      continue;
+    const double inv = 1.0 / count;
+    const double mx = sum[0] * inv, my = sum[1] * inv, mz = sum[2] * inv;
+    Eigen::Matrix3d cov;
+    cov << sq[0] * inv - mx * mx, sq[1] * inv - mx * my, sq[2] * inv - mx * mz, sq[1] * inv - mx * my,
+        sq[3] * inv - my * my, sq[4] * inv - my * mz, sq[2] * inv - mx * mz, sq[4] * inv - my * mz,
+        sq[5] * inv - mz * mz;
+    double smallest = 0.0;
+    Eigen::Vector3d normal;
+    pcl::eigen33(cov, smallest, normal);
+    const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
+    const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(rho > 0.0))
+      continue;
+    slots[s] = Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)};
+    kept[s] = 1;
+  }
+  std::vector<Sample> found;
+  found.reserve(picked.size());
+  for (std::size_t s = 0; s < picked.size(); ++s)
+    if (kept[s])
+      found.push_back(slots[s]);
+  if (found.empty())
+    throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
+  std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
+  const std::size_t bins =
+      std::clamp<std::size_t>(found.size() / tuned::kProfileSamplesPerBin, 1, tuned::kProfileMaxBins);
+  NoiseProfile profile;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t lo = b * found.size() / bins, hi = (b + 1) * found.size() / bins;
+    std::vector<float> rho, sigma, extent;
+    for (std::size_t i = lo; i < hi; ++i) {
+      rho.push_back(found[i].rho);
+      sigma.push_back(found[i].sigma);
+      extent.push_back(found[i].extent);
+    }
+    profile.range.push_back(medianOf(rho));
+    profile.sigma.push_back(medianOf(sigma));
+    profile.extent.push_back(medianOf(extent));
+  }
+  // Equal ranges (e.g. a fronto-parallel plane) would make interpolation degenerate.
+  for (std::size_t b = 1; b < profile.range.size(); ++b)
+    profile.range[b] = std::max(profile.range[b], std::nextafter(profile.range[b - 1], 1e30f));
+  return profile;
+}
+
+} // namespace range_nlm
