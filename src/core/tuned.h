@@ -45,7 +45,9 @@
   X(kGuideTolerance, float, 2.0f, "generated",                                                                        \
     "patch guide: a point's own difference within this many test thresholds (a lone change)")                         \
   X(kGuideMinFrames, int, 3, "real",                                                                                  \
-    "patch guide from this many neighbours on: with fewer each finds its own noise in it")
+    "patch guide from this many neighbours on: with fewer each finds its own noise in it")                            \
+  X(kLineOfSightMinCosFloor, float, 1e-3f, "derived",                                                                 \
+    "the line-of-sight step divides by |cos| of at least this, whatever min_cos is (a finite step)")
 
 /// Numbers of the frame estimates (noise profile, noise correlation, frame change, history) and
 /// of the isolated-outlier step.

@@ -98,7 +98,7 @@ applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& o
     return;
   }
   const auto move = limit.empty() ? detail::moveAlongRays<false> : detail::moveAlongRays<true>;
-  const float bound = std::max(min_cos, 1e-3f);
+  const float bound = std::max(min_cos, tuned::kLineOfSightMinCosFloor);
   const std::ptrdiff_t block = 4096;
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t lo = 0; lo < n; lo += block)
