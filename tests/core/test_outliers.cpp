@@ -1,84 +1,15 @@
 // Isolated outliers (correctIsolatedPoints, FilterParameters::outlier_sigmas): which points are
 // moved, where to, and which are left alone.
-#include "core/internal.h"
-
-#include <range_nlm/core/pipeline.h>
-#include <range_nlm/eval/synthetic_scene.h>
+#include "outlier_fixtures.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <limits>
 #include <vector>
 
 using namespace range_nlm;
-
-namespace
-{
-const Viewpoint kOrigin{0.0f, 0.0f, 0.0f};
-
-Grid
-gridOf(const pcl::PointCloud<pcl::PointXYZ>& c)
-{
-  return Grid::fromInterleaved(reinterpret_cast<const float*>(c.points.data()), static_cast<int>(c.width),
-                               static_cast<int>(c.height), sizeof(pcl::PointXYZ) / sizeof(float));
-}
-
-/// A plane 1.5 m in front of a 320 x 240 camera with Kinect-like noise (about 4 mm there).
-Grid
-noisyPlane()
-{
-  SceneOptions o;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 525.0 * 320 / 640;
-  o.scene = SceneType::plane;
-  o.plane_depth = 1.5;
-  o.noise = noiseModelFromString("kinect");
-  o.seed = 5;
-  return gridOf(renderSequence(o).front().noisy);
-}
-
-float
-rangeOf(const Grid& g, std::size_t i)
-{
-  return std::sqrt(g.x[i] * g.x[i] + g.y[i] * g.y[i] + g.z[i] * g.z[i]);
-}
-
-/// Moves point i along its ray by `delta` (metres of range).
-void
-pushAlongRay(Grid& g, std::size_t i, float delta)
-{
-  const float f = (rangeOf(g, i) + delta) / rangeOf(g, i);
-  g.x[i] *= f, g.y[i] *= f, g.z[i] *= f;
-}
-
-/// The noisy plane with a step edge: columns < 160 half a metre nearer.
-Grid
-stepEdge()
-{
-  Grid g = noisyPlane();
-  for (int v = 0; v < g.height; ++v)
-    for (int u = 0; u < 160; ++u)
-      pushAlongRay(g, static_cast<std::size_t>(v) * g.width + u, -0.5f);
-  return g;
-}
-
-NoiseProfile
-profileOf(const Grid& g)
-{
-  return detail::estimateNoiseProfile(g, 9, 1000, 42, kOrigin, 1);
-}
-
-bool
-samePoint(const Grid& a, const Grid& b, std::size_t i)
-{
-  return a.valid[i] == b.valid[i] && std::memcmp(&a.x[i], &b.x[i], sizeof(float)) == 0 &&
-         std::memcmp(&a.y[i], &b.y[i], sizeof(float)) == 0 && std::memcmp(&a.z[i], &b.z[i], sizeof(float)) == 0;
-}
-} // namespace
+using namespace range_nlm::test;
 
 TEST(Outliers, ASpikeLandsOnItsNeighboursSurfaceAndNothingElseMoves)
 {
@@ -155,112 +86,4 @@ TEST(Outliers, ThinStructuresSteepSurfacesLonePointsHolesAndInactivePointsStay)
   for (std::size_t i = 0; i < g.size(); ++i)
     ASSERT_EQ(all.valid[i], g.valid[i]);
   (void)h;
-}
-
-TEST(Outliers, AMixedPixelBetweenTwoSurfacesGoesToOneOfThemNotBetween)
-{
-  // A step edge in the noisy plane: columns < 160 half a metre nearer; a pixel of the far
-  // side's first column moved to 5 cm behind the halfway point (a mixed pixel), its
-  // 8-neighbours 3 near and 5 far.
-  Grid g = stepEdge();
-  const int w = g.width;
-  const NoiseProfile profile = profileOf(g);
-  const std::size_t mixed = static_cast<std::size_t>(100) * w + 160;
-  const float far = rangeOf(g, mixed);
-  pushAlongRay(g, mixed, -0.2f); // 5 cm behind the halfway point: nearer the far surface
-  Grid out = g;
-  EXPECT_EQ(detail::correctIsolatedPoints(out, profile, 10.0f, kOrigin, {}, 1), 1u);
-  // The median of 3 near and 5 far neighbours: the far surface, within its noise.
-  EXPECT_NEAR(rangeOf(out, mixed), far, 0.02f);
-  // With the neighbours left, right, above and below removed, 2 near and 2 far (diagonal)
-  // neighbours remain: of the two middle values, the one nearer the point (far), not their mean.
-  Grid even = g;
-  for (std::size_t j : {mixed - w, mixed + w, mixed - 1, mixed + 1})
-    even.valid[j] = 0;
-  Grid out_even = even;
-  EXPECT_EQ(detail::correctIsolatedPoints(out_even, profile, 10.0f, kOrigin, {}, 1), 1u);
-  const float r = rangeOf(out_even, mixed);
-  EXPECT_TRUE(std::fabs(r - far) < 0.02f) << "moved to " << r << " m, between the surfaces";
-}
-
-TEST(Outliers, ANoiseFreeFrameHasNone)
-{
-  // The boxes scene without noise: its silhouettes, the faces seen at grazing angles and the
-  // sphere's limb step along the rays by far more than its (tiny) noise sigma, but by a few pixel
-  // footprints at most; none of its points is an outlier.
-  SceneOptions o;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 525.0 * 320 / 640;
-  o.noise = noiseModelFromString("kinect");
-  o.noise_scale = 0.0;
-  const Grid g = gridOf(renderSequence(o).front().noisy);
-  EXPECT_EQ(detail::findIsolatedPoints(g, profileOf(g), 10.0f, kOrigin, {}, 2).size(), 0u);
-}
-
-TEST(Outliers, TwoMixedPixelsThatAgreeOnlyWithEachOtherAreNoSurface)
-{
-  // A step edge as above; two vertically adjacent pixels of the far side's first column both 25
-  // cm in front of the far surface (two mixed pixels at the same fraction): each agrees with
-  // the other and with nothing else, and both land on a surface. A third pixel on the next row
-  // is put in line with one of them and the far point beyond it (2 rho_j - rho_j'), as mixed
-  // pixels can be by chance: no surface either.
-  Grid g = stepEdge();
-  const int w = g.width;
-  const NoiseProfile profile = profileOf(g);
-  const std::size_t upper = static_cast<std::size_t>(100) * w + 160, lower = upper + w;
-  const float far_upper = rangeOf(g, upper), far_lower = rangeOf(g, lower);
-  pushAlongRay(g, upper, -0.25f);
-  pushAlongRay(g, lower, far_upper - 0.25f - far_lower); // the same range as the upper one
-  Grid out = g;
-  EXPECT_EQ(detail::correctIsolatedPoints(out, profile, 10.0f, kOrigin, {}, 1), 2u);
-  EXPECT_NEAR(rangeOf(out, upper), far_upper, 0.02f);
-  EXPECT_NEAR(rangeOf(out, lower), far_lower, 0.02f);
-
-  // In line by chance: on row 50, the near side's last pixel (159), a mixed pixel at 160 and one at
-  // 161 with rho(161) = 2 rho(160) - rho(159).
-  Grid line = stepEdge();
-  const std::size_t a = static_cast<std::size_t>(50) * w + 159, b = a + 1, c = a + 2;
-  const float far_b = rangeOf(line, b), far_c = rangeOf(line, c);
-  pushAlongRay(line, b, -0.3f);                                           // 0.2 m behind the near surface
-  pushAlongRay(line, c, 2.0f * rangeOf(line, b) - rangeOf(line, a) - far_c); // 0.4 m behind it, in line
-  Grid out_line = line;
-  EXPECT_EQ(detail::correctIsolatedPoints(out_line, profileOf(line), 10.0f, kOrigin, {}, 1), 2u);
-  EXPECT_NEAR(rangeOf(out_line, b), far_b, 0.02f);
-  EXPECT_NEAR(rangeOf(out_line, c), far_c, 0.02f);
-}
-
-TEST(Outliers, AWireOnePixelWideIsASurface)
-{
-  // A wire half a metre in front of the noisy plane: one pixel wide, 40 pixels long, horizontal
-  // and diagonal. Each of its points agrees with the wire points beside it (its tips with one,
-  // which agrees with the next): none is an outlier.
-  Grid g = noisyPlane();
-  const int w = g.width;
-  const std::size_t diagonal_start = static_cast<std::size_t>(150) * w + 100;
-  for (int k = 0; k < 40; ++k) {
-    pushAlongRay(g, static_cast<std::size_t>(60) * w + 100 + k, -0.5f);
-    pushAlongRay(g, diagonal_start + static_cast<std::size_t>(k) * (w + 1), -0.5f);
-  }
-  Grid out = g;
-  EXPECT_EQ(detail::correctIsolatedPoints(out, profileOf(noisyPlane()), 10.0f, kOrigin, {}, 1), 0u);
-}
-
-TEST(Outliers, AMixedPixelTakesTheSideOfTheEdgeMostOfItsSurroundingsAreOn)
-{
-  // The step edge again (columns < 160 half a metre nearer) and a mixed pixel halfway in the far
-  // side's first column, with the three pixels right of it missing: its ring holds 3 near and
-  // 2 far points, whose median is the near surface, but the 11 x 11 surroundings are mostly far
-  // (the edge runs straight past the pixel, which is on the far side of it).
-  Grid g = stepEdge();
-  const int w = g.width;
-  const NoiseProfile profile = profileOf(g);
-  const std::size_t mixed = static_cast<std::size_t>(100) * w + 160;
-  const float far = rangeOf(g, mixed);
-  pushAlongRay(g, mixed, -0.25f);
-  for (std::size_t j : {mixed - w + 1, mixed + 1, mixed + w + 1})
-    g.valid[j] = 0;
-  Grid out = g;
-  EXPECT_EQ(detail::correctIsolatedPoints(out, profile, 10.0f, kOrigin, {}, 1), 1u);
-  EXPECT_NEAR(rangeOf(out, mixed), far, 0.02f);
 }
