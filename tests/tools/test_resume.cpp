@@ -53,10 +53,13 @@ TEST_F(Resume, AnOutputIsFinishedOnlyIfItIsAReadableFrameOfTheSize)
   EXPECT_FALSE(isFinishedOutput(complete, false, intrinsics, 6, 8));
   EXPECT_FALSE(isFinishedOutput(path("missing.pcd"), false, intrinsics, 8, 6));
 
-  // An interrupted write: the first half of the file.
+  // An interrupted write: the header and half of the points (the file goes on with padding
+  // after the points, so the cut is made inside them).
   std::ifstream in(complete, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::ofstream(path("truncated.pcd"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  const std::size_t body = bytes.find("DATA binary\n") + std::string("DATA binary\n").size();
+  ASSERT_LT(body, bytes.size());
+  std::ofstream(path("truncated.pcd"), std::ios::binary) << bytes.substr(0, body + 8 * 6 * 16 / 2);
   EXPECT_FALSE(isFinishedOutput(path("truncated.pcd"), false, intrinsics, 8, 6));
 }
 
