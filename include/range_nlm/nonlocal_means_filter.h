@@ -64,5 +64,6 @@ activeMask(const pcl::Indices* indices, std::size_t size, bool use_indices);
 } // namespace range_nlm
 
 #ifdef RANGE_NLM_HEADER_ONLY
+#include <pcl/impl/pcl_base.hpp> // PCLBase's members, for point types PCL is not compiled for
 #include <range_nlm/impl/nonlocal_means_filter.hpp>
 #endif

@@ -70,5 +70,6 @@ protected:
 } // namespace range_nlm
 
 #ifdef RANGE_NLM_HEADER_ONLY
+#include <pcl/impl/pcl_base.hpp> // PCLBase's members, for point types PCL is not compiled for
 #include <range_nlm/impl/temporal_nonlocal_means_filter.hpp>
 #endif

@@ -1,6 +1,8 @@
 #include <range_nlm/impl/nonlocal_means_filter.hpp>
 
-#include <pcl/point_types.h>
+#include <range_nlm/point_types.h>
+
+#include <pcl/impl/instantiate.hpp>
 
 #include <string>
 
@@ -26,9 +28,4 @@ activeMask(const pcl::Indices* indices, std::size_t size, bool use_indices)
 } // namespace detail
 } // namespace range_nlm
 
-template class range_nlm::NonLocalMeansFilter<pcl::PointXYZ>;
-template class range_nlm::NonLocalMeansFilter<pcl::PointXYZI>;
-template class range_nlm::NonLocalMeansFilter<pcl::PointXYZRGB>;
-template class range_nlm::NonLocalMeansFilter<pcl::PointXYZRGBA>;
-template class range_nlm::NonLocalMeansFilter<pcl::PointNormal>;
-template class range_nlm::NonLocalMeansFilter<pcl::PointXYZRGBNormal>;
+PCL_INSTANTIATE(NonLocalMeansFilter, RANGE_NLM_POINT_TYPES)

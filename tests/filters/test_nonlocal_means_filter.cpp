@@ -1,10 +1,12 @@
 #include "test_support.h"
 
 #include <range_nlm/nonlocal_means_filter.h>
+#include <range_nlm/point_types.h>
 
 #include <pcl/common/transforms.h>
 #include <pcl/point_types.h>
 
+#include <boost/preprocessor/seq/enum.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -435,8 +437,7 @@ TEST(NonLocalMeansFilter, BadInputGivesClearErrors)
 template <typename PointT>
 class PointTypes : public ::testing::Test
 {};
-using InstantiatedTypes = ::testing::Types<pcl::PointXYZ, pcl::PointXYZI, pcl::PointXYZRGB, pcl::PointXYZRGBA,
-                                           pcl::PointNormal, pcl::PointXYZRGBNormal>;
+using InstantiatedTypes = ::testing::Types<BOOST_PP_SEQ_ENUM(RANGE_NLM_POINT_TYPES)>;
 TYPED_TEST_SUITE(PointTypes, InstantiatedTypes);
 
 namespace

@@ -79,3 +79,9 @@ fromGrid(const pcl::PointCloud<PointT>& input, const Grid& grid, pcl::PointCloud
 }
 
 } // namespace range_nlm
+
+/// Explicit instantiation of the grid adaptor for point type T: PCL_INSTANTIATE(GridAdaptor, types).
+#define PCL_INSTANTIATE_GridAdaptor(T)                                                                           \
+  template range_nlm::Grid range_nlm::toGrid<T>(const pcl::PointCloud<T>&, const char*);                       \
+  template void range_nlm::toGrid<T>(const pcl::PointCloud<T>&, range_nlm::Grid&, const char*);                \
+  template void range_nlm::fromGrid<T>(const pcl::PointCloud<T>&, const range_nlm::Grid&, pcl::PointCloud<T>&);

@@ -25,3 +25,6 @@ NonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
 }
 
 } // namespace range_nlm
+
+/// Explicit instantiation for point type T: PCL_INSTANTIATE(NonLocalMeansFilter, types).
+#define PCL_INSTANTIATE_NonLocalMeansFilter(T) template class range_nlm::NonLocalMeansFilter<T>;

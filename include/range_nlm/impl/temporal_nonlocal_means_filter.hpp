@@ -65,3 +65,6 @@ TemporalNonLocalMeansFilter<PointT>::applyFilter(PointCloud& output)
 }
 
 } // namespace range_nlm
+
+/// Explicit instantiation for point type T: PCL_INSTANTIATE(TemporalNonLocalMeansFilter, types).
+#define PCL_INSTANTIATE_TemporalNonLocalMeansFilter(T) template class range_nlm::TemporalNonLocalMeansFilter<T>;

@@ -226,3 +226,13 @@ filterSequence(const std::vector<typename pcl::PointCloud<PointT>::ConstPtr>& fr
 }
 
 } // namespace range_nlm
+
+/// Explicit instantiation for point type T: PCL_INSTANTIATE(TemporalStream, types) and
+/// PCL_INSTANTIATE(filterSequence, types).
+#define PCL_INSTANTIATE_TemporalStream(T) template class range_nlm::TemporalStream<T>;
+#define PCL_INSTANTIATE_filterSequence(T)                                                                         \
+  template std::vector<pcl::PointCloud<T>::Ptr> range_nlm::filterSequence<T>(                                    \
+      const std::vector<pcl::PointCloud<T>::ConstPtr>&, int, bool, const range_nlm::FilterParameters&);         \
+  template std::vector<pcl::PointCloud<T>::Ptr> range_nlm::filterSequence<T>(                                    \
+      const std::vector<pcl::PointCloud<T>::ConstPtr>&, int, range_nlm::TemporalWindow,                          \
+      const range_nlm::FilterParameters&);
