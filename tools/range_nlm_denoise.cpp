@@ -4,6 +4,7 @@
 #include "cli/cli.h"
 #include "cli/frame_output.h"
 #include "cli/pass_chain.h"
+#include "cli/passes.h"
 #include "cli/pipeline.h"
 #include "cli/resume.h"
 #include "cli/run_lock.h"
@@ -58,75 +59,6 @@ const char* const kUsage =
 /// --recursive with --shard: default frames of history replayed before a shard, per frame of the
 /// largest recursive radius (docs/cluster.md has the measurement behind it).
 constexpr std::size_t kWarmupPerRadius = 8;
-
-/// One filter pass of a schedule: parameters and temporal radius.
-struct Pass
-{
-  FilterParameters parameters;
-  int radius = 0;
-  bool causal = false;
-  /// The neighbour is the history of the frames before (TemporalWindow::recursive).
-  bool recursive = false;
-
-  TemporalWindow window() const
-  {
-    return recursive ? TemporalWindow::recursive : causal ? TemporalWindow::causal : TemporalWindow::centred;
-  }
-  PassReach reach() const { return {radius, window()}; }
-};
-
-std::vector<PassReach>
-reachOf(const std::vector<Pass>& passes)
-{
-  std::vector<PassReach> reach;
-  for (const Pass& pass : passes)
-    reach.push_back(pass.reach());
-  return reach;
-}
-
-Pass
-parsePass(const std::string& spec, const Pass& base)
-{
-  Pass pass = base;
-  std::stringstream ss(spec);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    const auto eq = item.find('=');
-    if (eq == std::string::npos)
-      throw UsageError("--pass '" + spec + "': expected key=value items, got '" + item + "'");
-    const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-    int v = 0;
-    try {
-      std::size_t used = 0;
-      v = std::stoi(value, &used);
-      if (used != value.size())
-        throw std::invalid_argument(value);
-    } catch (const std::exception&) {
-      throw UsageError("--pass '" + spec + "': '" + key + "' needs an integer, got '" + value + "'");
-    }
-    if (key == "search")
-      pass.parameters.search_window = v;
-    else if (key == "patch")
-      pass.parameters.patch_size = v;
-    else if (key == "radius")
-      pass.radius = v;
-    else if (key == "iterations")
-      pass.parameters.iterations = v;
-    else if (key == "normal")
-      pass.parameters.normal_window = v;
-    else
-      throw UsageError("--pass '" + spec + "': unknown key '" + key +
-                       "' (expected search, patch, radius, iterations, normal)");
-  }
-  try {
-    pass.parameters.validate();
-  } catch (const std::invalid_argument& e) {
-    throw UsageError("--pass '" + spec + "': " + e.what());
-  }
-  if (pass.radius < 0)
-    throw UsageError("--pass '" + spec + "': radius must be >= 0");
-  return pass;
-}
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 

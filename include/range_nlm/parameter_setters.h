@@ -1,5 +1,6 @@
 /// \file parameter_setters.h
-/// \brief Setters and getters shared by the static and the temporal filter; they write into one
+/// \brief Setters and getters shared by the static and the temporal filter, one pair for every
+/// field of FilterParameters (every entry of parameter_registry.h); they write into one
 /// FilterParameters, validated when filtering.
 #pragma once
 
@@ -56,10 +57,57 @@ public:
   /// See FilterParameters::patch_edge_gate.
   void setPatchEdgeGate(float sigmas) { parameters_.patch_edge_gate = sigmas; }
   float getPatchEdgeGate() const { return parameters_.patch_edge_gate; }
-  /// Displacement along the normal (default) or along the line of sight (the point stays on its
-  /// camera ray).
+  /// Displacement along the normal, along the line of sight (the point stays on its camera ray),
+  /// or automatic: along the line of sight where other frames take part, along the normal for a
+  /// frame filtered alone (default; paper preset normal).
   void setDisplacement(Displacement d) { parameters_.displacement = d; }
   Displacement getDisplacement() const { return parameters_.displacement; }
+
+  /// Spacing k of the search window's and patches' pixels; 0 = automatic (default; paper preset
+  /// 1). See FilterParameters::dilation.
+  void setDilation(int k) { parameters_.dilation = k; }
+  int getDilation() const { return parameters_.dilation; }
+  /// Factor on mu_d (or the window extent) for the automatic d, > 0 (default 1.5; paper preset
+  /// 0.75).
+  void setDistanceScale(float f) { parameters_.distance_scale = f; }
+  float getDistanceScale() const { return parameters_.distance_scale; }
+  /// Factor on sigma_s (or the local noise sigma) for the automatic s, > 0 (default 3; paper
+  /// preset 1).
+  void setSimilarityScale(float f) { parameters_.similarity_scale = f; }
+  float getSimilarityScale() const { return parameters_.similarity_scale; }
+  /// Random valid points sampled for the automatic bandwidths, >= 1 (default 1000).
+  void setBandwidthSamples(int n) { parameters_.bandwidth_samples = n; }
+  int getBandwidthSamples() const { return parameters_.bandwidth_samples; }
+  /// Side of the edge-preserving pre-smoothing of the copy the normals come from, odd, pixels;
+  /// 0 or 1 = normals from the raw points (default 7; paper preset 0).
+  void setNormalPresmoothWindowSize(int n) { parameters_.normal_presmooth_window = n; }
+  int getNormalPresmoothWindowSize() const { return parameters_.normal_presmooth_window; }
+  /// Range bandwidth of that pre-smoothing in noise sigmas, > 0 (default 3).
+  void setNormalPresmoothRange(float sigmas) { parameters_.normal_presmooth_range = sigmas; }
+  float getNormalPresmoothRange() const { return parameters_.normal_presmooth_range; }
+  /// Gated normals: neighbours farther than this many noise sigmas from a first plane fit are
+  /// left out of a second fit; 0 = off (default 3; paper preset 0).
+  void setNormalEdgeGate(float sigmas) { parameters_.normal_edge_gate = sigmas; }
+  float getNormalEdgeGate() const { return parameters_.normal_edge_gate; }
+  /// Smallest |cos(normal, ray)| of the ray step of Displacement::line_of_sight, in [0, 1]
+  /// (default 0.5).
+  void setLineOfSightMinCos(float c) { parameters_.line_of_sight_min_cos = c; }
+  float getLineOfSightMinCos() const { return parameters_.line_of_sight_min_cos; }
+  /// How the automatic bandwidths are estimated (default range_adaptive; paper preset global).
+  void setBandwidthModel(BandwidthModel m) { parameters_.bandwidth_model = m; }
+  BandwidthModel getBandwidthModel() const { return parameters_.bandwidth_model; }
+  /// Largest move of a point in noise sigmas (range_adaptive) or in s (global); 0 = unlimited
+  /// (default).
+  void setMaxDisplacement(float sigmas) { parameters_.max_displacement = sigmas; }
+  float getMaxDisplacement() const { return parameters_.max_displacement; }
+  /// Similarity bandwidth of the other frames' patches in the temporal filter (default guarded;
+  /// paper preset spatial).
+  void setCrossFrameBandwidth(CrossFrameBandwidth b) { parameters_.cross_frame_bandwidth = b; }
+  CrossFrameBandwidth getCrossFrameBandwidth() const { return parameters_.cross_frame_bandwidth; }
+  /// Guarded temporal runs: compare the other frames' patches with the patch guide (default
+  /// true; paper preset false). See FilterParameters::patch_guide.
+  void setPatchGuide(bool on) { parameters_.patch_guide = on; }
+  bool getPatchGuide() const { return parameters_.patch_guide; }
 
 protected:
   FilterParameters parameters_ = FilterParameters::recommended();

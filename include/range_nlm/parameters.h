@@ -78,7 +78,9 @@ enum class Displacement
 };
 
 /// Parameters of NonLocalMeansFilter / TemporalNonLocalMeansFilter. Every setter of the filters
-/// writes here; `validate()` is the single place where values are checked.
+/// writes here; `validate()` is the single place where values are checked, against the ranges of
+/// the parameter registry (parameter_registry.h), which also names each field for the tools, ROS
+/// and the docs.
 struct FilterParameters
 {
   /// Value of `distance_bandwidth` / `similarity_bandwidth` that requests automatic estimation.
@@ -186,7 +188,8 @@ struct FilterParameters
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;
 
-  /// Throws std::invalid_argument naming the first invalid parameter and its value.
+  /// Throws std::invalid_argument naming the first invalid parameter (in the order of the fields)
+  /// and its value.
   void validate() const;
   /// Throws std::invalid_argument if a window does not fit a width x height cloud.
   void validateFor(int width, int height) const;

@@ -1,11 +1,16 @@
 #include <range_nlm/ros/temporal_filter_nodelet.h>
 
+#include <range_nlm/parameter_registry.h>
+
 #include <pluginlib/class_list_macros.hpp>
 
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
+#include <variant>
 
 namespace range_nlm_ros
 {
@@ -27,87 +32,119 @@ readParameter(const ros::NodeHandle& node, const std::string& name, T& value, co
   return true;
 }
 
-/// A float parameter given as an integer or a double.
-bool
-readNumber(const ros::NodeHandle& node, const std::string& name, float& value)
+[[noreturn]] void
+wrongType(const std::string& name, const char* type, XmlRpc::XmlRpcValue& raw)
 {
-  double d = 0.0;
-  if (node.hasParam(name)) {
-    int i = 0;
-    if (node.getParam(name, i)) {
-      value = float(i);
-      return true;
+  throw std::invalid_argument("parameter ~" + name + " must be " + type + ", got '" + raw.toXml() + "'");
+}
+
+/// An integer parameter: an int, or a double with an integral value.
+long long
+integerOf(const std::string& name, XmlRpc::XmlRpcValue& raw)
+{
+  if (raw.getType() == XmlRpc::XmlRpcValue::TypeInt)
+    return static_cast<int>(raw);
+  if (raw.getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+    const double d = static_cast<double>(raw);
+    if (std::isfinite(d) && d == std::floor(d) && std::fabs(d) < 1e15)
+      return static_cast<long long>(d);
+  }
+  wrongType(name, "an integer", raw);
+}
+
+/// Sets a parameter's field from its ROS value, read by the field's type: integers as integers,
+/// fractional parameters as doubles (an int is taken too), enumerators by name.
+void
+setFromValue(const range_nlm::ParameterEntry& entry, const std::string& name, XmlRpc::XmlRpcValue& raw,
+             range_nlm::FilterParameters& p)
+{
+  std::visit(
+      [&](auto member) {
+        using T = std::decay_t<decltype(p.*member)>;
+        if constexpr (std::is_enum_v<T>) {
+          if (raw.getType() != XmlRpc::XmlRpcValue::TypeString)
+            wrongType(name, "a string", raw);
+          const std::string text = static_cast<std::string&>(raw);
+          const int value = range_nlm::choiceValue(entry, text);
+          if (value < 0)
+            throw std::invalid_argument("parameter ~" + name + " = '" + text + "' is invalid: expected " +
+                                        range_nlm::choiceList(entry));
+          p.*member = static_cast<T>(value);
+        } else if constexpr (std::is_same_v<T, bool>) {
+          if (raw.getType() != XmlRpc::XmlRpcValue::TypeBoolean)
+            wrongType(name, "a boolean", raw);
+          p.*member = static_cast<bool>(raw);
+        } else if constexpr (std::is_floating_point_v<T>) {
+          if (raw.getType() == XmlRpc::XmlRpcValue::TypeInt)
+            p.*member = static_cast<T>(static_cast<int>(raw));
+          else if (raw.getType() == XmlRpc::XmlRpcValue::TypeDouble)
+            p.*member = static_cast<T>(static_cast<double>(raw));
+          else
+            wrongType(name, "a number", raw);
+        } else if constexpr (std::is_unsigned_v<T>) {
+          const long long value = integerOf(name, raw);
+          if (value < 0)
+            throw std::invalid_argument("parameter ~" + name + " must be >= 0, got " + std::to_string(value));
+          p.*member = static_cast<T>(value);
+        } else {
+          const long long value = integerOf(name, raw);
+          if (value < std::numeric_limits<T>::min() || value > std::numeric_limits<T>::max())
+            wrongType(name, "an integer", raw);
+          p.*member = static_cast<T>(value);
+        }
+      },
+      entry.field);
+}
+
+/// Reads the parameter of a registry entry (its value, or its switch) if the node has it, and
+/// checks the value at once, so that the message names the ROS parameter.
+void
+readEntry(const ros::NodeHandle& node, const range_nlm::ParameterEntry& entry, range_nlm::FilterParameters& p)
+{
+  XmlRpc::XmlRpcValue raw;
+  if (entry.ros_name && node.hasParam(entry.ros_name) && node.getParam(entry.ros_name, raw)) {
+    const std::string name = entry.ros_name;
+    setFromValue(entry, name, raw, p);
+    if (entry.explicit_positive && !range_nlm::isPositive(entry, p))
+      throw std::invalid_argument("parameter ~" + name + " must be a positive number (omit it for automatic), got " +
+                                  range_nlm::parameterText(entry, p));
+    try {
+      range_nlm::checkParameter(entry, p);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("parameter ~" + name + ": " + e.what());
     }
   }
-  if (!readParameter(node, name, d, "a number"))
-    return false;
-  value = float(d);
-  return true;
+  bool flag = false;
+  if (entry.ros_switch.name && readParameter(node, entry.ros_switch.name, flag, "a boolean")) {
+    const int value = flag ? entry.ros_switch.on : entry.ros_switch.off;
+    if (value >= 0)
+      range_nlm::setChoice(entry, p, value);
+  }
 }
 
 } // namespace
+
+range_nlm::FilterParameters
+filterParametersFromParameters(const ros::NodeHandle& node)
+{
+  std::string preset = "default";
+  readParameter(node, "preset", preset, "a string");
+  range_nlm::FilterParameters p;
+  try {
+    p = range_nlm::FilterParameters::preset(preset);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("parameter ~preset: " + std::string(e.what()));
+  }
+  for (const range_nlm::ParameterEntry& entry : range_nlm::parameterRegistry())
+    readEntry(node, entry, p);
+  return p;
+}
 
 StreamSettings
 streamSettingsFromParameters(const ros::NodeHandle& node)
 {
   StreamSettings settings;
-  std::string preset = "default";
-  readParameter(node, "preset", preset, "a string");
-  try {
-    settings.parameters = range_nlm::FilterParameters::preset(preset);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("parameter ~preset: " + std::string(e.what()));
-  }
-  range_nlm::FilterParameters& p = settings.parameters;
-  readParameter(node, "search_window", p.search_window, "an integer");
-  readParameter(node, "patch", p.patch_size, "an integer");
-  readParameter(node, "iterations", p.iterations, "an integer");
-  readParameter(node, "threads", p.threads, "an integer");
-  readParameter(node, "normal_window", p.normal_window, "an integer");
-  readParameter(node, "dilation", p.dilation, "an integer");
-  std::string cross_frame;
-  if (readParameter(node, "cross_frame", cross_frame, "a string")) {
-    if (cross_frame == "guarded")
-      p.cross_frame_bandwidth = range_nlm::CrossFrameBandwidth::guarded;
-    else if (cross_frame == "temporal")
-      p.cross_frame_bandwidth = range_nlm::CrossFrameBandwidth::temporal;
-    else if (cross_frame == "spatial")
-      p.cross_frame_bandwidth = range_nlm::CrossFrameBandwidth::spatial;
-    else
-      throw std::invalid_argument("parameter ~cross_frame = '" + cross_frame +
-                                  "' is invalid: expected 'guarded', 'temporal' or 'spatial'");
-  }
-  int seed = 42;
-  if (readParameter(node, "seed", seed, "an integer") && seed < 0)
-    throw std::invalid_argument("parameter ~seed must be >= 0, got " + std::to_string(seed));
-  p.seed = static_cast<std::uint64_t>(seed);
-  for (const char* name : {"distance_bandwidth", "similarity_bandwidth"}) {
-    float value = 0.0f;
-    if (readNumber(node, name, value)) {
-      if (!(value > 0.0f))
-        throw std::invalid_argument(std::string("parameter ~") + name +
-                                    " must be a positive number (omit it for automatic), got " + std::to_string(value));
-      (std::string(name) == "distance_bandwidth" ? p.distance_bandwidth : p.similarity_bandwidth) = value;
-    }
-  }
-  // Thresholds in noise sigmas, 0 = off.
-  for (const auto& [name, target] : {std::pair<const char*, float*>{"outlier_sigmas", &p.outlier_sigmas},
-                                     std::pair<const char*, float*>{"patch_gate", &p.patch_edge_gate}}) {
-    float value = 0.0f;
-    if (readNumber(node, name, value)) {
-      if (!(value >= 0.0f) || !std::isfinite(value))
-        throw std::invalid_argument(std::string("parameter ~") + name + " must be a number >= 0 (0 = off), got " +
-                                    std::to_string(value));
-      *target = value;
-    }
-  }
-  bool flag = false;
-  if (readParameter(node, "direct", flag, "a boolean") && flag)
-    p.evaluation = range_nlm::Evaluation::direct;
-  flag = false;
-  // Unset: automatic (along the line of sight whenever other frames take part).
-  if (readParameter(node, "line_of_sight", flag, "a boolean"))
-    p.displacement = flag ? range_nlm::Displacement::line_of_sight : range_nlm::Displacement::normal;
+  settings.parameters = filterParametersFromParameters(node);
   readParameter(node, "temporal_radius", settings.temporal_radius, "an integer");
   bool causal = true, recursive = false;
   readParameter(node, "causal", causal, "a boolean");

@@ -1,10 +1,13 @@
 // The nodelet against a real ROS master: range_nlm_node and a nodelet manager with the plugin
 // loaded, fed PointCloud2 and depth image messages; outputs equal the library's TemporalStream on
 // the same frames, bad messages are dropped with a log line naming their stamp.
+#include "parameter_values.h"
 #include "ros_test_support.h"
 #include "test_support.h"
 
 #include <range_nlm/io/depth_image.h>
+#include <range_nlm/parameter_registry.h>
+#include <range_nlm/ros/temporal_filter_nodelet.h>
 #include <range_nlm/temporal_stream.h>
 
 #include <gtest/gtest.h>
@@ -23,6 +26,8 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <type_traits>
+#include <variant>
 
 using namespace range_nlm;
 using namespace range_nlm::test;
@@ -264,6 +269,104 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
     EXPECT_EQ(out->header.stamp.sec, std::uint32_t(10 + k - 1)); // frame k - 1, a frame late
     EXPECT_EQ(compareXyz(xyzOf(*out), *ready[0]), "");
   }
+}
+
+/// Sets the ROS parameter `key` to the entry's field of `p`, as the field's type: an int, a
+/// double, a bool, or an enumerator's name.
+void
+setRosParameter(const std::string& key, const ParameterEntry& entry, const FilterParameters& p)
+{
+  std::visit(
+      [&](auto member) {
+        using T = std::decay_t<decltype(p.*member)>;
+        if constexpr (std::is_enum_v<T>)
+          ros::param::set(key, parameterText(entry, p));
+        else if constexpr (std::is_same_v<T, bool>)
+          ros::param::set(key, bool(p.*member));
+        else if constexpr (std::is_floating_point_v<T>)
+          ros::param::set(key, double(p.*member));
+        else
+          ros::param::set(key, int(p.*member));
+      },
+      entry.field);
+}
+
+/// What filterParametersFromParameters refuses in namespace `ns` ("" if nothing).
+std::string
+rosRefusal(const std::string& ns)
+{
+  try {
+    range_nlm_ros::filterParametersFromParameters(ros::NodeHandle(ns));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RosParameters, EveryRegistryParameterReachesTheFilterParameters)
+{
+  const FilterParameters base = FilterParameters::recommended();
+  for (const ParameterEntry& entry : parameterRegistry()) {
+    const std::string ns = std::string("/rnlm_registry_") + entry.name;
+    if (entry.ros_name) {
+      const FilterParameters other = test::withOtherValue(entry, base);
+      setRosParameter(ns + "/" + entry.ros_name, entry, other);
+      const FilterParameters p = range_nlm_ros::filterParametersFromParameters(ros::NodeHandle(ns));
+      EXPECT_TRUE(test::sameField(entry, p, other)) << "~" << entry.ros_name;
+      EXPECT_TRUE(test::sameOtherFields(entry, p, base)) << "~" << entry.ros_name;
+      ros::param::del(ns + "/" + entry.ros_name);
+    }
+    if (entry.ros_switch.name) {
+      const std::string key = ns + "/" + entry.ros_switch.name;
+      for (const bool flag : {true, false}) {
+        ros::param::set(key, flag);
+        FilterParameters expected = base;
+        const int value = flag ? entry.ros_switch.on : entry.ros_switch.off;
+        if (value >= 0)
+          setChoice(entry, expected, value);
+        const FilterParameters p = range_nlm_ros::filterParametersFromParameters(ros::NodeHandle(ns));
+        EXPECT_TRUE(test::sameField(entry, p, expected)) << "~" << entry.ros_switch.name << " " << flag;
+        EXPECT_TRUE(test::sameOtherFields(entry, p, base)) << "~" << entry.ros_switch.name << " " << flag;
+      }
+      ros::param::del(key);
+    }
+  }
+}
+
+TEST(RosParameters, FractionalValuesAreReadAsDoublesAndIntegersAsIntegers)
+{
+  ros::param::set("/rnlm_fraction/outlier_sigmas", 2.5);
+  ros::param::set("/rnlm_fraction/patch_gate", 4); // an int for a fractional parameter
+  ros::param::set("/rnlm_fraction/preset", std::string("paper"));
+  ros::param::set("/rnlm_fraction/search_window", 9.0); // an integral double
+  const FilterParameters p = range_nlm_ros::filterParametersFromParameters(ros::NodeHandle("/rnlm_fraction"));
+  EXPECT_EQ(p.outlier_sigmas, 2.5f);
+  EXPECT_EQ(p.patch_edge_gate, 4.0f);
+  EXPECT_EQ(p.search_window, 9);
+  EXPECT_EQ(p.patch_size, FilterParameters::paper().patch_size);
+  EXPECT_EQ(p.bandwidth_model, BandwidthModel::global);
+}
+
+TEST(RosParameters, BadValuesAreRefusedNamingTheParameter)
+{
+  ros::param::set("/rnlm_bad1/patch_gate", -1.0);
+  EXPECT_EQ(rosRefusal("/rnlm_bad1"), "parameter ~patch_gate: range_nlm: parameter patch_edge_gate = -1 is invalid: "
+                                      "must be finite and >= 0 (0 = off)");
+  ros::param::set("/rnlm_bad2/search_window", 7.5);
+  EXPECT_NE(rosRefusal("/rnlm_bad2").find("parameter ~search_window must be an integer"), std::string::npos);
+  ros::param::set("/rnlm_bad3/cross_frame", std::string("always"));
+  EXPECT_EQ(rosRefusal("/rnlm_bad3"),
+            "parameter ~cross_frame = 'always' is invalid: expected 'guarded', 'temporal' or 'spatial'");
+  ros::param::set("/rnlm_bad4/distance_bandwidth", 0.0);
+  EXPECT_NE(rosRefusal("/rnlm_bad4").find("parameter ~distance_bandwidth must be a positive number"),
+            std::string::npos);
+  ros::param::set("/rnlm_bad5/seed", -3);
+  EXPECT_EQ(rosRefusal("/rnlm_bad5"), "parameter ~seed must be >= 0, got -3");
+  ros::param::set("/rnlm_bad6/patch_guide", 1);
+  EXPECT_NE(rosRefusal("/rnlm_bad6").find("parameter ~patch_guide must be a boolean"), std::string::npos);
+  ros::param::set("/rnlm_bad7/normal_window", 4);
+  EXPECT_NE(rosRefusal("/rnlm_bad7").find("parameter ~normal_window: range_nlm: parameter normal_window = 4"),
+            std::string::npos);
 }
 
 /// The 16UC1 image of a cloud's z (millimetres, 0 = no depth).

@@ -1,5 +1,7 @@
 #include "cli/cli.h"
 
+#include <range_nlm/parameter_registry.h>
+
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
@@ -17,6 +19,8 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <type_traits>
+#include <variant>
 #include <signal.h>
 #include <unistd.h>
 
@@ -67,31 +71,101 @@ parseCommandLine(int argc, char** argv, const po::options_description& options,
   return true;
 }
 
+namespace
+{
+/// A value for the help: 0 as what it stands for.
+std::string
+helpValue(const ParameterEntry& entry, const FilterParameters& p)
+{
+  const std::string text = parameterText(entry, p);
+  return entry.zero_means && text == "0" ? entry.zero_means : text;
+}
+
+/// The entry's help with the presets' values: "[default: v]" where they agree, else
+/// "[preset: v; paper: w]".
+std::string
+optionHelp(const ParameterEntry& entry)
+{
+  std::string help = entry.help;
+  if (entry.cli_always)
+    return help;
+  const std::string recommended = helpValue(entry, FilterParameters::recommended());
+  const std::string paper = helpValue(entry, FilterParameters::paper());
+  return help + (recommended == paper ? " [default: " + recommended + "]"
+                                      : " [preset: " + recommended + "; paper: " + paper + "]");
+}
+
+/// The option of an entry, its value of the field's own type (an enumerator by name).
+void
+addOption(po::options_description& options, const ParameterEntry& entry)
+{
+  const FilterParameters d = FilterParameters::recommended();
+  const std::string help = optionHelp(entry);
+  std::visit(
+      [&](auto member) {
+        using T = std::decay_t<decltype(d.*member)>;
+        if constexpr (std::is_enum_v<T>) {
+          options.add_options()(entry.cli_option, po::value<std::string>(), help.c_str());
+        } else {
+          auto* value = po::value<T>();
+          if (entry.cli_always)
+            value->default_value(d.*member);
+          options.add_options()(entry.cli_option, value, help.c_str());
+        }
+      },
+      entry.field);
+}
+
+/// Sets the entry's field from its option.
+void
+setFromOption(const po::variables_map& vm, const ParameterEntry& entry, FilterParameters& p)
+{
+  std::visit(
+      [&](auto member) {
+        using T = std::decay_t<decltype(p.*member)>;
+        if constexpr (std::is_enum_v<T>) {
+          const std::string text = vm[entry.cli_option].as<std::string>();
+          const int value = choiceValue(entry, text);
+          if (value < 0)
+            throw UsageError("--" + std::string(entry.cli_option) + " '" + text + "' is invalid: expected " +
+                             choiceList(entry));
+          p.*member = static_cast<T>(value);
+        } else {
+          p.*member = vm[entry.cli_option].as<T>();
+        }
+      },
+      entry.field);
+}
+
+/// Sets an enumerated field from the one of its flags that was given.
+void
+setFromSwitches(const po::variables_map& vm, const ParameterEntry& entry, FilterParameters& p)
+{
+  const ParameterSwitch* given = nullptr;
+  for (const ParameterSwitch& flag : entry.cli_switches) {
+    if (!vm.count(flag.name))
+      continue;
+    if (given)
+      throw UsageError("--" + std::string(given->name) + " and --" + flag.name + " contradict each other: give one");
+    given = &flag;
+  }
+  if (given)
+    setChoice(entry, p, given->on);
+}
+} // namespace
+
 void
 addFilterOptions(po::options_description& options)
 {
-  const FilterParameters d = FilterParameters::recommended();
-  // clang-format off
-  options.add_options()
-    ("preset", po::value<std::string>()->default_value("default"),
-     "parameter preset: 'default' (recommended) or 'paper' (the literal method); options below override it")
-    ("search-window", po::value<int>(), ("S, odd side of the search window in pixels [preset: " + std::to_string(d.search_window) + "]").c_str())
-    ("patch", po::value<int>(), ("P, odd side of the similarity patch in pixels [preset: " + std::to_string(d.patch_size) + "]").c_str())
-    ("iterations", po::value<int>(), ("filter passes [preset: " + std::to_string(d.iterations) + "]").c_str())
-    ("threads", po::value<int>()->default_value(0), "OpenMP threads, 0 = all cores, at most 1024 (output does not depend on it)")
-    ("distance-bandwidth", po::value<float>(), "d in cloud units [default: automatic]")
-    ("similarity-bandwidth", po::value<float>(), "s in cloud units [default: automatic]")
-    ("seed", po::value<std::uint64_t>()->default_value(42), "seed of the bandwidth sample")
-    ("normal-window", po::value<int>(), ("odd side of the normal-estimation neighbourhood [preset: " + std::to_string(d.normal_window) + "]").c_str())
-    ("dilation", po::value<int>(), "spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is spatially correlated or strong, 1 otherwise), 1 = contiguous windows [preset: 0; paper: 1]")
-    ("cross-frame", po::value<std::string>(), "temporal runs: s and d of the other frames: 'guarded' (raised to their frame-to-frame noise unless the frame moved), 'temporal' (always raised: a static camera), 'spatial' (their own spatial noise, the paper) [preset: guarded; paper: spatial]")
-    ("outlier-sigmas", po::value<float>(), "isolated outliers (structured-light mismatches, time-of-flight flying pixels) farther than this many noise sigmas from all their neighbours are moved along their ray onto the neighbours' surface before filtering; 0 = off [preset: 10; paper: 0]")
-    ("patch-gate", po::value<float>(), "pixels of a point's patch farther than this many noise sigmas from its tangent plane (the other side of a depth edge) are left out of the patch comparison; 0 = off [preset: 18; paper: 0]")
-    ("direct", "use the direct (reference) evaluation instead of the fast (windowed) one")
-    ("line-of-sight", "move points along their camera ray instead of the normal, also when filtered alone "
-                      "(default: along the ray in temporal runs, along the normal otherwise)")
-    ("along-normal", "move points along their normal, also in temporal runs (the paper)");
-  // clang-format on
+  options.add_options()("preset", po::value<std::string>()->default_value("default"),
+                        "parameter preset: 'default' (recommended) or 'paper' (the literal method); options below "
+                        "override it");
+  for (const ParameterEntry& entry : parameterRegistry()) {
+    if (entry.cli_option)
+      addOption(options, entry);
+    for (const ParameterSwitch& flag : entry.cli_switches)
+      options.add_options()(flag.name, flag.help);
+  }
 }
 
 FilterParameters
@@ -103,48 +177,15 @@ filterParametersFrom(const po::variables_map& vm)
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
-  if (vm.count("search-window"))
-    p.search_window = vm["search-window"].as<int>();
-  if (vm.count("patch"))
-    p.patch_size = vm["patch"].as<int>();
-  if (vm.count("iterations"))
-    p.iterations = vm["iterations"].as<int>();
-  p.threads = vm["threads"].as<int>();
-  if (vm.count("distance-bandwidth"))
-    p.distance_bandwidth = vm["distance-bandwidth"].as<float>();
-  if (vm.count("similarity-bandwidth"))
-    p.similarity_bandwidth = vm["similarity-bandwidth"].as<float>();
-  p.seed = vm["seed"].as<std::uint64_t>();
-  if (vm.count("normal-window"))
-    p.normal_window = vm["normal-window"].as<int>();
-  if (vm.count("dilation"))
-    p.dilation = vm["dilation"].as<int>();
-  if (vm.count("cross-frame")) {
-    const std::string mode = vm["cross-frame"].as<std::string>();
-    if (mode == "guarded")
-      p.cross_frame_bandwidth = CrossFrameBandwidth::guarded;
-    else if (mode == "temporal")
-      p.cross_frame_bandwidth = CrossFrameBandwidth::temporal;
-    else if (mode == "spatial")
-      p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
-    else
-      throw UsageError("--cross-frame '" + mode + "' is invalid: expected 'guarded', 'temporal' or 'spatial'");
+  for (const ParameterEntry& entry : parameterRegistry()) {
+    if (entry.cli_option && vm.count(entry.cli_option))
+      setFromOption(vm, entry, p);
+    setFromSwitches(vm, entry, p);
   }
-  if (vm.count("outlier-sigmas"))
-    p.outlier_sigmas = vm["outlier-sigmas"].as<float>();
-  if (vm.count("patch-gate"))
-    p.patch_edge_gate = vm["patch-gate"].as<float>();
-  if (vm.count("direct"))
-    p.evaluation = Evaluation::direct;
-  if (vm.count("line-of-sight") && vm.count("along-normal"))
-    throw UsageError("--line-of-sight and --along-normal contradict each other: give one");
-  if (vm.count("line-of-sight"))
-    p.displacement = Displacement::line_of_sight;
-  if (vm.count("along-normal"))
-    p.displacement = Displacement::normal;
-  if ((vm.count("distance-bandwidth") && !(p.distance_bandwidth > 0.0f)) ||
-      (vm.count("similarity-bandwidth") && !(p.similarity_bandwidth > 0.0f)))
-    throw UsageError("a bandwidth given on the command line must be a positive number (omit it for automatic)");
+  for (const ParameterEntry& entry : parameterRegistry())
+    if (entry.explicit_positive && entry.cli_option && vm.count(entry.cli_option) && !isPositive(entry, p))
+      throw UsageError("--" + std::string(entry.cli_option) + " " + parameterText(entry, p) +
+                       ": a bandwidth given on the command line must be a positive number (omit it for automatic)");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

@@ -56,11 +56,13 @@ parseCommandLine(int argc, char** argv, const boost::program_options::options_de
                  const boost::program_options::positional_options_description& positional,
                  boost::program_options::variables_map& vm, const std::string& usage);
 
-/// Adds --search-window, --patch, --iterations, --threads, --distance-bandwidth,
-/// --similarity-bandwidth, --seed, --normal-window, --preset, --direct, --line-of-sight.
+/// Adds --preset and the option (and flags) of every parameter of the registry
+/// (parameter_registry.h): --search-window, --patch, --iterations, --threads, --seed, ...,
+/// --direct, --line-of-sight, --along-normal. Each option's value has its field's type.
 void
 addFilterOptions(boost::program_options::options_description& options);
-/// Builds validated FilterParameters from the options added by addFilterOptions.
+/// Builds validated FilterParameters from the options added by addFilterOptions: the preset,
+/// overridden by every option given. Throws UsageError naming the option or the parameter.
 FilterParameters
 filterParametersFrom(const boost::program_options::variables_map& vm);
 

@@ -280,7 +280,8 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
 void
 applyOffsets(Grid& grid, const NormalField& normals, const std::vector<float>& offsets,
              Displacement displacement, const Viewpoint& viewpoint,
-             const std::vector<float>& limit = {}, float min_cos = 0.25f);
+             const std::vector<float>& limit = {},
+             float min_cos = FilterParameters{}.line_of_sight_min_cos);
 
 /// Frame weights of the temporal filter: Psi_dk = (1/2)^|k - c|, Psi_sk = exp(-s_k^2 / max s^2).
 float

@@ -6,10 +6,12 @@
 ///   ~input = "points" (default): subscribes `input` (sensor_msgs/PointCloud2), publishes `output`.
 ///   ~input = "depth": subscribes `depth/image` (16UC1 mm or 32FC1 m) and `depth/camera_info`,
 ///     publishes `depth_filtered/image` and `depth_filtered/camera_info` (the info of that image).
-/// Parameters (private, named as range_nlm_denoise's options with '-' -> '_'): preset,
-/// search_window, patch, iterations, threads, distance_bandwidth, similarity_bandwidth, seed,
-/// normal_window, direct, line_of_sight, temporal_radius, causal (default true here: no output
-/// delay), recursive; plus queue_size. See docs/ros.md.
+/// Parameters (private): preset, and every parameter of the registry by its ROS name
+/// (parameter_registry.h; mostly range_nlm_denoise's options with '-' -> '_': search_window,
+/// patch, iterations, threads, distance_bandwidth, similarity_bandwidth, seed, normal_window,
+/// dilation, cross_frame, outlier_sigmas, patch_gate, ..., and the switches direct and
+/// line_of_sight), each of its field's type; temporal_radius, causal (default true here: no
+/// output delay), recursive; plus input and queue_size. See docs/ros.md.
 /// Output messages keep the input's header, layout and encoding; only x, y, z (or the depth)
 /// change. A message that cannot be filtered is logged (ROS_WARN, with its stamp) and dropped.
 #pragma once
@@ -29,6 +31,14 @@
 
 namespace range_nlm_ros
 {
+
+/// FilterParameters from a node's private parameters: the preset, overridden by every parameter
+/// of the registry the node has. Integers are read as integers (a double only with an integral
+/// value), fractional parameters as doubles (an int is taken too), enumerators by name. Throws
+/// std::invalid_argument naming the ROS parameter and the value on a wrong type or an invalid
+/// value.
+range_nlm::FilterParameters
+filterParametersFromParameters(const ros::NodeHandle& private_node);
 
 /// Reads StreamSettings from a node's private parameters (names as above). The live default is
 /// a causal window. Throws std::invalid_argument naming the parameter and the value on a wrong
