@@ -92,7 +92,7 @@ addOptions(po::options_description& options)
     ("recursive", "the temporal neighbour is the history, a running average of the frames (newest weighted "
                   "1 / (2R + 1)): no output delay, the whole history carried along at the cost of one frame "
                   "(implies --causal)")
-    ("pass", po::value<std::vector<std::string>>(), "a pass of a schedule, repeatable: search=S,patch=P,radius=R[,iterations=N][,normal=W]")
+    ("pass", po::value<std::vector<std::string>>(), ("a pass of a schedule, repeatable: key=value items, e.g. search=9,patch=3,radius=1; keys: " + passKeys()).c_str())
     ("input-bag", po::value<std::string>(), "rosbag whose --topic PointCloud2 messages are filtered (other topics copied)")
     ("output-bag", po::value<std::string>(), "rosbag written with the filtered messages (same topics and record times)")
     ("topic", po::value<std::string>(), "topic of organized sensor_msgs/PointCloud2 messages to filter (with --input-bag)")
