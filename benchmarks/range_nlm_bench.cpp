@@ -545,7 +545,7 @@ breakdownSteps(const std::vector<Stage>& stages, const FilterParameters& p, std:
 {
   const bool temporal = count > 1;
   std::vector<Step> steps;
-  steps.push_back({"cloud -> Grid (detail::toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
+  steps.push_back({"cloud -> Grid (toGrid)" + (temporal ? ", " + std::to_string(count) + " frames" : ""),
                    false, true, false});
   for (Stage stage : stages)
     steps.push_back({stageLabel(stage, p, count), !oncePerCall(stage), true, false});
