@@ -183,7 +183,7 @@ struct FilterParameters
   /// is within the test's threshold (FrameTerm::patches; docs/method.md, "The patch guide"),
   /// instead of the current frame's own noisy patch, to which the non-local weights would
   /// otherwise lean. Used when at least three neighbours enter the guide (radius 2 and more;
-  /// kGuideMinFrames in src/core/internal.h). Default true (paper: false).
+  /// tuned::kGuideMinFrames in src/core/tuned.h). Default true (paper: false).
   bool patch_guide = true;
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;
