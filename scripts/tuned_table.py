@@ -6,7 +6,7 @@ import re
 
 source = (pathlib.Path(__file__).resolve().parent.parent / "src/core/tuned.h").read_text()
 text = re.sub(r"\\\n", " ", source)
-rows = re.findall(r'X\((k\w+),\s*(\w+),\s*([-0-9.]+)f?,\s*"([^"]*)",\s*"([^"]*)"\)', text)
+rows = re.findall(r'X\((k\w+),\s*(\w+),\s*([-+0-9.eE]+?)f?,\s*"([^"]*)",\s*"([^"]*)"\)', text)
 print("| number | value | fitted on | why |")
 print("|---|---|---|---|")
 for name, _type, value, fitted_on, why in rows:
