@@ -10,4 +10,5 @@ rows = re.findall(r'X\((k\w+),\s*(\w+),\s*([-+0-9.eE]+?)f?,\s*"([^"]*)",\s*"([^"
 print("| number | value | fitted on | why |")
 print("|---|---|---|---|")
 for name, _type, value, fitted_on, why in rows:
+    why = why.replace("|", "\\|")
     print(f"| `{name}` | {value} | {fitted_on} | {why} |")
