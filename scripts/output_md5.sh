@@ -50,9 +50,9 @@ run direct --input-dir "$work/small/noisy" --output-dir "$work/out/small-direct"
 run small --input-dir "$work/small/noisy" --output-dir "$work/out/small-fast" --temporal-radius 1
 
 # Real frames: the Kinect sequence, the shipped single frames and depth images.
-run kin-s --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-static"
-run kin-t --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-temporal1" --temporal-radius 1
-run kin-r --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-recursive1" --temporal-radius 1 --recursive
+run kin-s --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-static"
+run kin-t --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-temporal1" --temporal-radius 1
+run kin-r --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-recursive1" --temporal-radius 1 --recursive
 run milk --input "$data/milk_cartoon_all_small_clorox.pcd" --output "$work/out/milk.pcd"
 # Every folder of depth images (with the intrinsics.txt of it or of its parent), IR images left out.
 while IFS= read -r dir; do

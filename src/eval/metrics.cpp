@@ -588,25 +588,22 @@ PlanarRegionOptions::validate() const
     fail("plane_distance", plane_distance, "must be finite and > 0 metres");
 }
 
-PlanarRegions
-findPlanarRegions(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionOptions& options)
+namespace
 {
-  options.validate();
-  checkOrganized(raw, "raw frame");
-  const int width = int(raw.width), height = int(raw.height), b = options.block_size;
-  PlanarRegions out;
-  out.width = width;
-  out.height = height;
-  out.label.assign(raw.size(), -1);
-  out.border.assign(raw.size(), 0);
-  auto tolerance = [&](float z) { return options.plane_distance * double(z) * double(z); };
 
-  // Seed blocks: fully valid, planar within a third of the tolerance at their mean depth.
-  struct Seed
-  {
-    double score;
-    int u0, v0;
-  };
+/// A seed block of findPlanarRegions: its top-left pixel and how planar it is (rms / allowed).
+struct Seed
+{
+  double score;
+  int u0, v0;
+};
+
+/// Seed blocks: fully valid, planar within a third of the tolerance at their mean depth, not
+/// grazing; the most planar first.
+std::vector<Seed>
+findSeedBlocks(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionOptions& options)
+{
+  const int width = int(raw.width), height = int(raw.height), b = options.block_size;
   std::vector<Seed> seeds;
   for (int v0 = 0; v0 + b <= height; v0 += b)
     for (int u0 = 0; u0 + b <= width; u0 += b) {
@@ -631,19 +628,123 @@ findPlanarRegions(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionO
         seeds.push_back({rms / allowed, u0, v0});
     }
   std::stable_sort(seeds.begin(), seeds.end(), [](const Seed& a, const Seed& c) { return a.score < c.score; });
+  return seeds;
+}
 
-  // A pixel joins a region only if the median of the distances of its valid 3x3 neighbours (at
-  // least 4) lies within a third of the tolerance: the median's noise is well below a point's,
-  // so regions stop at creases instead of creeping a noise width beyond them, and it ignores a
-  // minority of neighbours beyond a depth edge, so pixels at edges still join.
-  auto medianDistance = [&](const Eigen::Vector4d& plane, int u, int v, double& median) {
+/// Grows the regions of findPlanarRegions from their seed blocks, one at a time.
+class RegionGrower
+{
+public:
+  RegionGrower(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionOptions& options, PlanarRegions& out)
+      : raw_(raw), options_(options), out_(out), width_(int(raw.width)), height_(int(raw.height)),
+        dropped_(raw.size(), 0)
+  {
+  }
+
+  /// Grows a region from `seed` if its block is still free; keeps it if it is large and planar
+  /// enough, else marks its pixels dropped.
+  void grow(const Seed& seed)
+  {
+    if (!isFree(seed))
+      return;
+    const int id = int(out_.planes.size());
+    PlaneSums sums;
+    start(seed, id, sums);
+    spread(id, sums);
+    // Too small, or not planar after all (grown around a curved surface or over a crease).
+    double rms;
+    const Eigen::Vector4d plane = sums.fit(&rms);
+    const double z = sums.sum.z() / double(sums.n);
+    if (members_.size() < std::size_t(options_.min_region_pixels) ||
+        rms >= options_.plane_distance * z * z / 3.0 || grazing(plane, sums)) {
+      for (std::size_t i : members_) {
+        out_.label[i] = -1;
+        dropped_[i] = 1;
+      }
+      return;
+    }
+    out_.planes.push_back(plane);
+    out_.sizes.push_back(members_.size());
+  }
+
+private:
+  double tolerance(float z) const { return options_.plane_distance * double(z) * double(z); }
+
+  /// Pixels of dropped regions may join later regions, but seed none (a seed inside would grow
+  /// the same dropped region again).
+  bool isFree(const Seed& seed) const
+  {
+    const int b = options_.block_size;
+    bool free = true;
+    for (int v = seed.v0; v < seed.v0 + b && free; ++v)
+      for (int u = seed.u0; u < seed.u0 + b; ++u)
+        free = free && out_.label[std::size_t(v) * width_ + u] == -1 && !dropped_[std::size_t(v) * width_ + u];
+    return free;
+  }
+
+  void start(const Seed& seed, int id, PlaneSums& sums)
+  {
+    const int b = options_.block_size;
+    members_.clear();
+    queue_.clear();
+    for (int v = seed.v0; v < seed.v0 + b; ++v)
+      for (int u = seed.u0; u < seed.u0 + b; ++u) {
+        const std::size_t i = std::size_t(v) * width_ + u;
+        out_.label[i] = id;
+        sums.add(raw_[i]);
+        members_.push_back(i);
+        queue_.push_back(i);
+      }
+  }
+
+  /// Breadth-first over the 4-neighbours, refitting the plane each time the region doubles.
+  void spread(int id, PlaneSums& sums)
+  {
+    Eigen::Vector4d plane = sums.fit();
+    std::size_t refit_at = 2 * sums.n;
+    for (std::size_t head = 0; head < queue_.size(); ++head) {
+      const int u = int(queue_[head] % std::size_t(width_)), v = int(queue_[head] / std::size_t(width_));
+      const int nu[4] = {u - 1, u + 1, u, u}, nv[4] = {v, v, v - 1, v + 1};
+      for (int k = 0; k < 4; ++k) {
+        if (nu[k] < 0 || nv[k] < 0 || nu[k] >= width_ || nv[k] >= height_)
+          continue;
+        const std::size_t j = std::size_t(nv[k]) * width_ + nu[k];
+        if (!joins(plane, j, nu[k], nv[k]))
+          continue;
+        out_.label[j] = id;
+        sums.add(raw_[j]);
+        members_.push_back(j);
+        queue_.push_back(j);
+        if (sums.n >= refit_at) {
+          plane = sums.fit();
+          refit_at = 2 * sums.n;
+        }
+      }
+    }
+  }
+
+  /// A pixel joins a region only if it is within the tolerance of the plane and the median of
+  /// the distances of its valid 3x3 neighbours (at least 4) lies within a third of it: the
+  /// median's noise is well below a point's, so regions stop at creases instead of creeping a
+  /// noise width beyond them, and it ignores a minority of neighbours beyond a depth edge, so
+  /// pixels at edges still join.
+  bool joins(const Eigen::Vector4d& plane, std::size_t j, int u, int v) const
+  {
+    const pcl::PointXYZ& p = raw_[j];
+    double median;
+    return out_.label[j] == -1 && isValid(p) && !(std::abs(planeDistance(plane, p)) > tolerance(p.z)) &&
+           medianDistance(plane, u, v, median) && !(3.0 * std::abs(median) > tolerance(p.z));
+  }
+
+  bool medianDistance(const Eigen::Vector4d& plane, int u, int v, double& median) const
+  {
     double d[9];
     int n = 0;
     for (int dv = -1; dv <= 1; ++dv)
       for (int du = -1; du <= 1; ++du) {
-        if (u + du < 0 || v + dv < 0 || u + du >= width || v + dv >= height)
+        if (u + du < 0 || v + dv < 0 || u + du >= width_ || v + dv >= height_)
           continue;
-        const pcl::PointXYZ& q = raw[std::size_t(v + dv) * width + u + du];
+        const pcl::PointXYZ& q = raw_[std::size_t(v + dv) * width_ + u + du];
         if (isValid(q))
           d[n++] = planeDistance(plane, q);
       }
@@ -652,81 +753,48 @@ findPlanarRegions(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionO
     std::nth_element(d, d + n / 2, d + n);
     median = d[n / 2];
     return true;
-  };
-
-  // Pixels of dropped regions: they may join later regions, but seed none (a seed inside would
-  // grow the same dropped region again).
-  std::vector<unsigned char> dropped(raw.size(), 0);
-  std::vector<std::size_t> members, queue;
-  for (const Seed& seed : seeds) {
-    bool free = true;
-    for (int v = seed.v0; v < seed.v0 + b && free; ++v)
-      for (int u = seed.u0; u < seed.u0 + b; ++u)
-        free = free && out.label[std::size_t(v) * width + u] == -1 && !dropped[std::size_t(v) * width + u];
-    if (!free)
-      continue;
-    const int id = int(out.planes.size());
-    PlaneSums sums;
-    members.clear();
-    queue.clear();
-    for (int v = seed.v0; v < seed.v0 + b; ++v)
-      for (int u = seed.u0; u < seed.u0 + b; ++u) {
-        const std::size_t i = std::size_t(v) * width + u;
-        out.label[i] = id;
-        sums.add(raw[i]);
-        members.push_back(i);
-        queue.push_back(i);
-      }
-    Eigen::Vector4d plane = sums.fit();
-    std::size_t refit_at = 2 * sums.n;
-    for (std::size_t head = 0; head < queue.size(); ++head) {
-      const int u = int(queue[head] % std::size_t(width)), v = int(queue[head] / std::size_t(width));
-      const int nu[4] = {u - 1, u + 1, u, u}, nv[4] = {v, v, v - 1, v + 1};
-      for (int k = 0; k < 4; ++k) {
-        if (nu[k] < 0 || nv[k] < 0 || nu[k] >= width || nv[k] >= height)
-          continue;
-        const std::size_t j = std::size_t(nv[k]) * width + nu[k];
-        const pcl::PointXYZ& p = raw[j];
-        double median;
-        if (out.label[j] != -1 || !isValid(p) || std::abs(planeDistance(plane, p)) > tolerance(p.z) ||
-            !medianDistance(plane, nu[k], nv[k], median) || 3.0 * std::abs(median) > tolerance(p.z))
-          continue;
-        out.label[j] = id;
-        sums.add(p);
-        members.push_back(j);
-        queue.push_back(j);
-        if (sums.n >= refit_at) {
-          plane = sums.fit();
-          refit_at = 2 * sums.n;
-        }
-      }
-    }
-    // Too small, or not planar after all (grown around a curved surface or over a crease).
-    double rms;
-    plane = sums.fit(&rms);
-    const double z = sums.sum.z() / double(sums.n);
-    if (members.size() < std::size_t(options.min_region_pixels) || rms >= options.plane_distance * z * z / 3.0 ||
-        grazing(plane, sums)) {
-      for (std::size_t i : members) {
-        out.label[i] = -1;
-        dropped[i] = 1;
-      }
-      continue;
-    }
-    out.planes.push_back(plane);
-    out.sizes.push_back(members.size());
   }
 
-  // Border band: region pixels within border_band of a pixel of the image outside the region.
+  const pcl::PointCloud<pcl::PointXYZ>& raw_;
+  const PlanarRegionOptions& options_;
+  PlanarRegions& out_;
+  const int width_, height_;
+  std::vector<unsigned char> dropped_;
+  std::vector<std::size_t> members_, queue_;
+};
+
+/// Border band: region pixels within border_band of a pixel of the image outside the region.
+void
+markBorderBand(PlanarRegions& out, int border_band)
+{
+  const std::size_t size = out.label.size();
   for (int id = 0; id < int(out.planes.size()); ++id) {
-    std::vector<unsigned char> outside(raw.size());
-    for (std::size_t i = 0; i < raw.size(); ++i)
+    std::vector<unsigned char> outside(size);
+    for (std::size_t i = 0; i < size; ++i)
       outside[i] = out.label[i] != id;
-    const std::vector<unsigned char> near = dilate(outside, width, height, options.border_band);
-    for (std::size_t i = 0; i < raw.size(); ++i)
+    const std::vector<unsigned char> near = dilate(outside, out.width, out.height, border_band);
+    for (std::size_t i = 0; i < size; ++i)
       if (out.label[i] == id && near[i])
         out.border[i] = 1;
   }
+}
+
+} // namespace
+
+PlanarRegions
+findPlanarRegions(const pcl::PointCloud<pcl::PointXYZ>& raw, const PlanarRegionOptions& options)
+{
+  options.validate();
+  checkOrganized(raw, "raw frame");
+  PlanarRegions out;
+  out.width = int(raw.width);
+  out.height = int(raw.height);
+  out.label.assign(raw.size(), -1);
+  out.border.assign(raw.size(), 0);
+  RegionGrower grower(raw, options, out);
+  for (const Seed& seed : findSeedBlocks(raw, options))
+    grower.grow(seed);
+  markBorderBand(out, options.border_band);
   return out;
 }
 
