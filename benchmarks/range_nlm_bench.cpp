@@ -12,6 +12,7 @@
 #include <range_nlm/core/pipeline.h>
 #include <range_nlm/grid_adaptor.h>
 #include <range_nlm/nonlocal_means_filter.h>
+#include <range_nlm/parameter_registry.h>
 #include <range_nlm/temporal_nonlocal_means_filter.h>
 #include <range_nlm/temporal_stream.h>
 
@@ -142,27 +143,45 @@ parametersFor(const Settings& s, int search, int patch, Evaluation evaluation)
   return p;
 }
 
-/// What the range_nlm runs do besides the window sizes, for the notes of the table.
+/// What the range_nlm runs do besides the window sizes, for the notes of the table: the preset
+/// and every parameter of the registry set to another value than the preset's (--iterations,
+/// --parameter).
 std::string
 describe(const Settings& s)
 {
-  const FilterParameters& p = s.parameters;
+  const FilterParameters preset = FilterParameters::preset(s.preset);
   std::ostringstream d;
-  d << "preset '" << s.preset << "': " << p.iterations << " iteration(s), normals " << p.normal_window << "x"
-    << p.normal_window;
-  if (p.normal_presmooth_window > 1)
-    d << " from a " << p.normal_presmooth_window << "x" << p.normal_presmooth_window << " pre-smoothed copy";
-  if (p.normal_edge_gate > 0.0f)
-    d << ", edge gate " << p.normal_edge_gate << " sigma";
-  d << ", " << (p.bandwidth_model == BandwidthModel::range_adaptive ? "range-adaptive" : "global")
-    << " bandwidths";
-  if (p.displacement == Displacement::line_of_sight)
-    d << ", line of sight";
-  if (p.outlier_sigmas > 0.0f)
-    d << ", isolated outliers at " << p.outlier_sigmas << " sigma";
-  if (p.patch_edge_gate > 0.0f)
-    d << ", patch gate " << p.patch_edge_gate << " sigma";
+  d << "preset '" << s.preset << "'";
+  const char* separator = ": ";
+  for (const ParameterEntry& entry : parameterRegistry()) {
+    const std::string name = entry.name;
+    if (name == "search_window" || name == "patch_size" || name == "evaluation" || name == "threads")
+      continue; // set by each configuration and --threads
+    const std::string value = parameterText(entry, s.parameters);
+    if (value != parameterText(entry, preset)) {
+      d << separator << name << " " << value;
+      separator = ", ";
+    }
+  }
   return d.str();
+}
+
+/// Applies a --parameter NAME=VALUE to `p`: NAME is a field of the parameter registry.
+void
+applyParameterOption(const std::string& spec, FilterParameters& p)
+{
+  const std::size_t eq = spec.find('=');
+  const std::string name = spec.substr(0, eq);
+  const ParameterEntry* entry = eq == std::string::npos ? nullptr : findParameter(name);
+  if (!entry)
+    throw UsageError("--parameter '" + spec + "': expected NAME=VALUE with NAME a field of FilterParameters " +
+                     "(the field table of docs/method.md), e.g. patch_edge_gate=0");
+  try {
+    setParameterFromText(*entry, p, spec.substr(eq + 1));
+    checkParameter(*entry, p);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError("--parameter '" + spec + "': " + e.what());
+  }
 }
 
 /// The frames of one configuration.
@@ -1215,6 +1234,9 @@ settingsFrom(const po::variables_map& vm)
                      " is invalid: must be >= 1 (0 = the preset's)");
   if (iterations > 0)
     s.parameters.iterations = iterations;
+  if (vm.count("parameter"))
+    for (const std::string& spec : vm["parameter"].as<std::vector<std::string>>())
+      applyParameterOption(spec, s.parameters);
   s.runs = vm["runs"].as<int>();
   const int threads = vm["threads"].as<int>();
   s.all = vm.count("all") > 0;
@@ -1377,6 +1399,8 @@ run(int argc, char** argv)
     ("preset", po::value<std::string>()->default_value("default"),
      "range_nlm parameters: 'default' (recommended) or 'paper' (the literal method); the configuration sets search window and patch")
     ("iterations", po::value<int>()->default_value(0), "range_nlm filter passes; 0 = the preset's")
+    ("parameter", po::value<std::vector<std::string>>(),
+     "NAME=VALUE, repeatable: a field of range_nlm's FilterParameters (the parameter registry, docs/method.md's field table) set on top of --preset for every range_nlm run of the timing, e.g. patch_edge_gate=0; search_window, patch_size and evaluation are set by each configuration")
     ("runs", po::value<int>()->default_value(5), "timed runs per method, each right after an untimed warm-up run; the median is reported")
     ("threads", po::value<int>()->default_value(0), "threads for every method (range_nlm, FastBilateralFilterOMP, MLS); 0 = all cores")
     ("all", "also give the temporal direct path --runs runs with warm-ups (default: timed once without one, it is very slow)")

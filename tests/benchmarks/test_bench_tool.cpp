@@ -72,6 +72,29 @@ TEST(BenchTool, RejectsContradictoryDirectOptions)
   EXPECT_NE(r.output.find("--all and --no-direct"), std::string::npos) << r.output;
 }
 
+// --parameter sets any field of the parameter registry on top of the preset; the notes name every
+// field that differs from the preset, and a bad name or value is refused by name before timing.
+TEST(BenchTool, ParameterOptionSetsARegistryFieldOrIsRefusedByName)
+{
+  const test::CommandResult bad_name = test::runTool("range_nlm_bench", "--parameter no_such_field=1");
+  EXPECT_EQ(bad_name.status, 2) << bad_name.output;
+  EXPECT_NE(bad_name.output.find("--parameter 'no_such_field=1'"), std::string::npos) << bad_name.output;
+  const test::CommandResult bad_value = test::runTool("range_nlm_bench", "--parameter patch_edge_gate=-1");
+  EXPECT_EQ(bad_value.status, 2) << bad_value.output;
+  EXPECT_NE(bad_value.output.find("patch_edge_gate"), std::string::npos) << bad_value.output;
+  EXPECT_NE(bad_value.output.find("-1"), std::string::npos) << bad_value.output;
+  const test::CommandResult not_a_number = test::runTool("range_nlm_bench", "--parameter outlier_sigmas=many");
+  EXPECT_EQ(not_a_number.status, 2) << not_a_number.output;
+  EXPECT_NE(not_a_number.output.find("outlier_sigmas"), std::string::npos) << not_a_number.output;
+  if (test::kAddressSanitizer)
+    GTEST_SKIP() << "under AddressSanitizer Eigen's aligned allocator differs between this build and "
+                    "Debian's PCL, so the cloud pcl::MovingLeastSquares resizes cannot be freed here";
+  const test::CommandResult r = test::runTool(
+      "range_nlm_bench", "--config static --preset paper --runs 1 --no-direct --parameter outlier_sigmas=7.5");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("preset 'paper': outlier_sigmas 7.5"), std::string::npos) << r.output;
+}
+
 namespace
 {
 /// A method for runInterleaved whose every call appends `letter` to the file at `log` and whose
