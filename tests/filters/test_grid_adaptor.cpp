@@ -19,17 +19,6 @@ using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 namespace
 {
-std::string
-errorOf(const std::function<void()>& f)
-{
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
-
 /// A 5 x 4 cloud of PointT whose every byte outside x, y, z holds a pattern of the point's index,
 /// with a NaN in one coordinate of points 3 (x), 6 (y) and 13 (z).
 template <typename PointT>
@@ -105,11 +94,11 @@ TYPED_TEST(GridAdaptorPointTypes, NanInAnyCoordinateGivesNanInAllAndOtherFieldsS
 TEST(GridAdaptor, UnorganizedCloudsAreRefusedByName)
 {
   Cloud row(20, 1);
-  EXPECT_NE(errorOf([&] { toGrid(row, "test frame"); }).find("the test frame is not organized (width 20, height 1)"),
+  EXPECT_NE(test::errorOf([&] { toGrid(row, "test frame"); }).find("the test frame is not organized (width 20, height 1)"),
             std::string::npos);
   Cloud mismatched(4, 3);
   mismatched.height = 4;
-  EXPECT_NE(errorOf([&] { toGrid(mismatched); }).find("holds 12 points but declares width x height = 4 x 4"),
+  EXPECT_NE(test::errorOf([&] { toGrid(mismatched); }).find("holds 12 points but declares width x height = 4 x 4"),
             std::string::npos);
 }
 
@@ -148,7 +137,7 @@ TEST(GridAdaptor, ValidityAndInfinitiesFromTheCoordinateBits)
   Cloud infinite = cloud;
   infinite[9].y = -INFINITY; // pixel (1, 2)
   infinite[10].z = INFINITY;
-  EXPECT_NE(errorOf([&] { toGrid(infinite); }).find("infinite coordinate at pixel (1, 2)"),
+  EXPECT_NE(test::errorOf([&] { toGrid(infinite); }).find("infinite coordinate at pixel (1, 2)"),
             std::string::npos);
 }
 

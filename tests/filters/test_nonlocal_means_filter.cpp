@@ -51,16 +51,6 @@ noisyPlane(double sigma, std::uint64_t seed = 1, int w = 48, int h = 40)
   return test::makeCloud(w, h, test::plane(kPlaneNormal, kPlaneOffset), sigma, seed);
 }
 
-std::string
-errorOf(const std::function<void()>& f)
-{
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
 } // namespace
 
 TEST(NonLocalMeansFilter, MatchesNaiveReferenceOfTheFormula)
@@ -262,7 +252,7 @@ TEST(NonLocalMeansFilter, IndicesLimitWhichPointsMove)
   EXPECT_GT(moved, static_cast<int>(in.size()) / 4);
   indices->push_back(static_cast<int>(in.size()) + 4);
   f.setIndices(indices);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("outside the cloud"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("outside the cloud"), std::string::npos);
 }
 
 TEST(NonLocalMeansFilter, InPlaceEqualsOutOfPlace)
@@ -405,32 +395,32 @@ TEST(NonLocalMeansFilter, BadInputGivesClearErrors)
   unorganized->push_back(pcl::PointXYZ(0, 0, 1));
   unorganized->push_back(pcl::PointXYZ(0, 1, 1));
   f.setInputCloud(unorganized);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("not organized"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("not organized"), std::string::npos);
 
   Cloud::Ptr small(new Cloud(noisyPlane(0.001, 1, 8, 8)));
   f.setInputCloud(small);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("search_window = 9 is larger than the cloud (8 x 8)"),
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("search_window = 9 is larger than the cloud (8 x 8)"),
             std::string::npos);
 
   Cloud::Ptr cloud(new Cloud(noisyPlane(0.001)));
   f.setInputCloud(cloud);
   f.setSearchWindowSize(4);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("search_window = 4"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("search_window = 4"), std::string::npos);
   f.setSearchWindowSize(7);
   f.setPatchSize(-1);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("patch_size = -1"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("patch_size = -1"), std::string::npos);
   f.setPatchSize(5);
 
   Cloud::Ptr nan_cloud(new Cloud(*cloud));
   for (auto& q : *nan_cloud)
     q.x = q.y = q.z = std::nanf("");
   f.setInputCloud(nan_cloud);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("no valid point"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("no valid point"), std::string::npos);
 
   Cloud::Ptr inf_cloud(new Cloud(*cloud));
   (*inf_cloud)[5].z = INFINITY;
   f.setInputCloud(inf_cloud);
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("infinite coordinate at pixel (5, 0)"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("infinite coordinate at pixel (5, 0)"), std::string::npos);
 }
 
 // Every instantiated point type: same geometry as PointXYZ, every other field untouched.
@@ -505,7 +495,7 @@ TEST(NonLocalMeansFilter, AbsurdThreadCountIsRefusedNotCrashed)
   f.setInputCloud(Cloud::Ptr(new Cloud(noisyPlane(0.001))));
   f.setNumberOfThreads(100000);
   Cloud out;
-  EXPECT_NE(errorOf([&] { f.filter(out); }).find("threads = 100000"), std::string::npos);
+  EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("threads = 100000"), std::string::npos);
 }
 
 TEST(NonLocalMeansFilter, IsolatedOutliersAreMovedOntoTheSurfaceAndCounted)

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,20 @@ namespace range_nlm
 {
 namespace test
 {
+
+/// The message of the std::invalid_argument `f` throws, or "" if it throws none (any other
+/// exception propagates and fails the test).
+inline std::string
+errorOf(const std::function<void()>& f)
+{
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
 
 /// Depth (along +z) of a surface seen through pixel (u, v) of a w x h pinhole camera
 /// (focal f pixels, centre (w-1)/2, (h-1)/2); NaN = no surface.
