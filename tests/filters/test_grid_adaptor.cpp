@@ -1,6 +1,7 @@
+#include "test_support.h"
+
 #include <range_nlm/grid_adaptor.h>
 #include <range_nlm/point_types.h>
-#include "test_support.h"
 
 #include <pcl/point_types.h>
 
