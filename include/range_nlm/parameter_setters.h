@@ -67,6 +67,9 @@ public:
   /// 1). See FilterParameters::dilation.
   void setDilation(int k) { parameters_.dilation = k; }
   int getDilation() const { return parameters_.dilation; }
+  /// Scales of the multiscale run (1 = one scale). See FilterParameters::scales.
+  void setScales(int scales) { parameters_.scales = scales; }
+  int getScales() const { return parameters_.scales; }
   /// Factor on mu_d (or the window extent) for the automatic d, > 0 (default 1.5; paper preset
   /// 0.75).
   void setDistanceScale(float f) { parameters_.distance_scale = f; }

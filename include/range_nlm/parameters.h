@@ -107,6 +107,15 @@ struct FilterParameters
   /// narrower than the windows. 1 = contiguous windows
   /// (the paper). >= 0, default 0.
   int dilation = 0;
+  /// Scales of the multiscale run: with s > 1 the frames are reduced s - 1 times to half their
+  /// width and height (each 2 x 2 block the mean of its points on one surface); the coarsest
+  /// scale is filtered with these parameters (contiguous windows unless `dilation` is given),
+  /// and each finer scale gets the coarser one's range corrections carried up along the rays,
+  /// then one pass of its own on the current frame. Noise correlated over L pixels is close to
+  /// white at the scale where a pixel covers L, and a pass there costs 1 / 4^(s-1) of one at full
+  /// resolution. Fewer scales where the coarsest would be narrower than the windows. 1 = one
+  /// scale (the paper). 1 ... 6, default 1.
+  int scales = 1;
   /// Number of filter passes; normals and automatic bandwidths are re-estimated before each.
   /// >= 1, default 2 (paper: 1).
   int iterations = 2;

@@ -161,6 +161,12 @@ windowAndBandwidthEntries()
       .help("spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is "
             "spatially correlated or strong, 1 otherwise), 1 = contiguous windows")
       .cli("dilation").ros("dilation").pass("dilation"),
+    Entry("scales", &P::scales)
+      .range(between(1, 6, "must be 1 (one scale) ... 6"))
+      .docs("[multiscale filtering](#multiscale-filtering)")
+      .help("scales of the multiscale run: the frame halved scales - 1 times, filtered from the coarsest up, each "
+            "finer scale one pass after the coarser one's corrections; 1 = one scale")
+      .cli("scales").ros("scales").pass("scales"),
     Entry("iterations", &P::iterations)
       .range(atLeast(1, "must be at least 1"))
       .help("filter passes; normals and automatic bandwidths are re-estimated before each")

@@ -51,6 +51,7 @@ FilterParameters::paper()
   p.cross_frame_bandwidth = CrossFrameBandwidth::spatial;
   p.patch_guide = false;
   p.dilation = 1;
+  p.scales = 1;
   return p;
 }
 

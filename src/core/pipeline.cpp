@@ -146,6 +146,8 @@ toString(Stage stage)
     return "outliers";
   case Stage::dilation:
     return "dilation";
+  case Stage::pyramid:
+    return "pyramid";
   case Stage::neighbour_frames:
     return "neighbour frames";
   case Stage::bandwidths:
@@ -256,6 +258,11 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::neighbour_frames);
     frames = detail::levelNeighbourFrames(frames, center, parameters, viewpoint, workspace);
+  }
+  const int scales = detail::usableScales(*frames[center], parameters);
+  if (scales > 1 && frames[center]->countValid() > 0) {
+    detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
+    return;
   }
   detail::StageTracker split(workspace.observer, 0);
   const int k = detail::chooseDilation(*frames[center], parameters, split);

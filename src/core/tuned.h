@@ -38,6 +38,10 @@
     "correlated noise: the variance at lag 1 below this share of that at lag R")                                      \
   X(kStrongNoiseFootprints, float, 3.25f, "real",                                                                     \
     "strong noise (doubles the dilation): between the noisiest real frame and the gaining scenes")                    \
+  X(kScaleSurfaceSigmas, float, 3.0f, "generated",                                                                    \
+    "multiscale: points of a 2 x 2 block within this many noise sigmas lie on one surface")                           \
+  X(kScaleSurfaceFootprints, float, 2.0f, "generated",                                                                \
+    "multiscale: and within at least this many pixel footprints (a noise-free frame)")                               \
   X(kChangeSigmas, float, 3.0f, "real",                                                                               \
     "test of change: a difference beyond this many sigmas of two samples is a change")                                \
   X(kGuideMargin, int, 2, "generated",                                                                                \

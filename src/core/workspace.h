@@ -42,6 +42,15 @@ struct Workspace
   std::vector<Grid> phase_frames;
   Grid merged;
   std::vector<Workspace> phase;
+  /// Multiscale runs: the frames reduced to the next coarser scale, the current frame's fine
+  /// pixels that entered their block's mean, ranges and corrections of the coarser scale, the
+  /// current frame with the coarser scale's corrections carried up, and the workspace of the
+  /// coarser scale's run (one element once used).
+  std::vector<Grid> pyramid;
+  std::vector<unsigned char> pyramid_member;
+  std::vector<float> pyramid_rho, pyramid_correction;
+  Grid carried;
+  std::vector<Workspace> levels;
   /// The current frame with its isolated outliers moved (FilterParameters::outlier_sigmas).
   Grid corrected;
   /// The frames brought to a common level (levelling of low-frequency offsets between frames),

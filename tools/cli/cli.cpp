@@ -257,6 +257,7 @@ stageStart(Stage stage)
   switch (stage) {
   case Stage::outliers:
   case Stage::dilation:
+  case Stage::pyramid:
   case Stage::neighbour_frames:
   case Stage::bandwidths:
     return 0.0;

@@ -320,6 +320,9 @@ enum class Stage
   /// Dilated passes (FilterParameters::dilation): the automatic dilation's noise correlation
   /// estimate, the split of the frames into their k^2 phases and the merge of the results.
   dilation,
+  /// Multiscale runs (FilterParameters::scales): the reduction of the frames to the next coarser
+  /// scale and the carry of its corrections to the finer one, once per scale.
+  pyramid,
   /// Bandwidths (or noise profiles) of the temporal neighbour frames.
   neighbour_frames,
   /// The current frame's noise profile (range-adaptive model) or bandwidths (global model).

@@ -42,6 +42,17 @@ runDilatedPasses(const std::vector<const Grid*>& frames, int center, const Filte
                  const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace, int k,
                  StageTracker& split);
 
+/// The scales the multiscale run uses: FilterParameters::scales, fewer where the coarsest would be
+/// narrower than the windows. (multiscale.cpp)
+int
+usableScales(const Grid& input, const FilterParameters& parameters);
+/// The multiscale run with `scales` > 1 scales: the frames reduced to half size (2 x 2 blocks,
+/// each the mean of its points on one surface), filtered there (recursively, `scales` - 1
+/// scales), the current frame's range corrections carried up along the rays and one contiguous
+/// pass on the current frame. Reduction and carry are timed as Stage::pyramid. (multiscale.cpp)
+void
+runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+              const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace, int scales);
 /// The filter with contiguous windows: the stages below, `iterations` times. (pipeline.cpp)
 void
 runContiguous(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
