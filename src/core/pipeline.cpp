@@ -260,18 +260,24 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     frames = detail::levelNeighbourFrames(frames, center, parameters, viewpoint, workspace);
   }
   const int scales = detail::usableScales(*frames[center], parameters);
-  if (scales > 1 && frames[center]->countValid() > 0) {
+  if (scales > 1 && frames[center]->countValid() > 0)
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
-    return;
-  }
-  detail::StageTracker split(workspace.observer, 0);
-  const int k = detail::chooseDilation(*frames[center], parameters, split);
+  else
+    detail::runOneScale(frames, center, parameters, viewpoint, active, workspace);
+}
+
+void
+detail::runOneScale(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                    const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
+{
+  StageTracker split(workspace.observer, 0);
+  const int k = chooseDilation(*frames[center], parameters, split);
   if (k <= 1) {
     split.stop();
-    detail::runContiguous(frames, center, parameters, viewpoint, active, workspace);
+    runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
-  detail::runDilatedPasses(frames, center, parameters, viewpoint, active, workspace, k, split);
+  runDilatedPasses(frames, center, parameters, viewpoint, active, workspace, k, split);
 }
 
 void

@@ -1,7 +1,7 @@
 // The multiscale run (FilterParameters::scales): the frames reduced to a pyramid whose coarse
 // scales are filtered first, where spatially correlated noise is close to white and a pass costs a
-// quarter of the scale above; each scale's correction is carried up along the rays and the finer
-// scale then filtered with one short pass. docs/method.md, "Multiscale filtering".
+// quarter of the scale above; each scale's range corrections are carried up along the rays, then
+// the finer scale is filtered. docs/method.md, "Multiscale filtering".
 #include "stages.h"
 
 #include "../internal.h"
@@ -142,12 +142,11 @@ struct CarrySource
   const SurfaceTolerance& tolerance;
 };
 
-/// The bilinear weights at fine pixel (u, v) with range r of the four nearest coarse pixels, each
-/// taken only where its reduced point lies on one surface with the fine point and holds a
-/// correction, and only the fine point's own block when it did not enter that block's mean (the
-/// other side of a depth edge). On a steep surface, where every neighbour's range may differ by
-/// more than the tolerance, the point's own block, which it entered, is its surface. Returns the
-/// number of coarse pixels taken (0: none).
+/// The bilinear weights at fine pixel (u, v) with range r of the four nearest coarse pixels that
+/// hold a correction and whose reduced point lies on one surface with the fine point (within the
+/// tolerance at r: never across a depth edge). On a surface so steep that the neighbours' ranges
+/// all differ by more than that, the point's own block, if the point entered its mean. Returns
+/// the number of coarse pixels taken (0: none).
 int
 carryWeights(const CarrySource& s, int u, int v, float r, bool member, std::array<std::size_t, 4>& cells,
              std::array<float, 4>& weights)
@@ -157,7 +156,6 @@ carryWeights(const CarrySource& s, int u, int v, float r, bool member, std::arra
   const float cv = std::clamp((v - 0.5f) * 0.5f, 0.0f, static_cast<float>(s.height - 1));
   const int a0 = std::min(static_cast<int>(cu), s.width - 1), b0 = std::min(static_cast<int>(cv), s.height - 1);
   const float fu = cu - a0, fv = cv - b0;
-  const int own_a = u / 2, own_b = v / 2;
   const float tol = s.tolerance.at(r);
   int taken = 0;
   for (int db = 0; db < 2; ++db)
@@ -167,12 +165,10 @@ carryWeights(const CarrySource& s, int u, int v, float r, bool member, std::arra
       const std::size_t c = static_cast<std::size_t>(b) * s.width + a;
       if (!(w > 0.0f) || std::isnan(s.correction[c]) || std::fabs(s.rho[c] - r) > tol)
         continue;
-      if (!member && (a != own_a || b != own_b))
-        continue;
       cells[taken] = c;
       weights[taken++] = w;
     }
-  const std::size_t own = static_cast<std::size_t>(own_b) * s.width + own_a;
+  const std::size_t own = static_cast<std::size_t>(v / 2) * s.width + u / 2;
   if (taken == 0 && member && !std::isnan(s.correction[own])) {
     cells[0] = own;
     weights[taken++] = 1.0f;
@@ -227,7 +223,8 @@ reduceActive(const std::vector<unsigned char>& active, int width, int height, st
         coarse[static_cast<std::size_t>(v / 2) * w + u / 2] = 1;
 }
 
-/// The parameters of the scale below: one scale fewer, contiguous windows unless given.
+/// The parameters of the coarser scale: one scale fewer, contiguous windows unless a dilation is
+/// given (correlated noise is close to white there).
 FilterParameters
 coarserParameters(const FilterParameters& parameters, int scales)
 {
@@ -238,16 +235,12 @@ coarserParameters(const FilterParameters& parameters, int scales)
   return coarse;
 }
 
-/// The parameters of the pass at a scale whose coarser scales are filtered: one iteration on the
-/// current frame alone (its neighbours were used at the coarse scales, and their low frequencies
-/// are not corrected at this one).
+/// The parameters of the one-scale run at the finest scale.
 FilterParameters
-finePassParameters(const FilterParameters& parameters)
+oneScaleParameters(const FilterParameters& parameters)
 {
   FilterParameters fine = parameters;
   fine.scales = 1;
-  fine.dilation = 1;
-  fine.iterations = 1;
   return fine;
 }
 
@@ -281,7 +274,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
                                    viewpoint, threads);
   } catch (const UnfilterableFrame&) {
     stage.stop();
-    runContiguous(frames, center, parameters, viewpoint, active, workspace); // reports it
+    runOneScale(frames, center, oneScaleParameters(parameters), viewpoint, active, workspace); // reports it
     return;
   }
   rangesOf(input, viewpoint, threads, workspace.ranges);
@@ -306,9 +299,9 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
     if (scales > 2)
       runMultiscale(coarse_frames, center, coarse_parameters, viewpoint, coarse_active, coarse, scales - 1);
     else
-      runContiguous(coarse_frames, center, coarse_parameters, viewpoint, coarse_active, coarse);
+      runOneScale(coarse_frames, center, coarse_parameters, viewpoint, coarse_active, coarse);
   } catch (const UnfilterableFrame&) {
-    runContiguous({&input}, 0, finePassParameters(parameters), viewpoint, active, workspace);
+    runOneScale(frames, center, oneScaleParameters(parameters), viewpoint, active, workspace);
     return;
   }
   stage.start(Stage::pyramid);
@@ -319,13 +312,11 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
                            workspace.pyramid_correction, workspace.pyramid_member, tolerance};
   carryCorrections(input, workspace.ranges, source, viewpoint, active, threads, workspace.carried);
   stage.stop();
-  runContiguous({&workspace.carried}, 0, finePassParameters(parameters), viewpoint, active, workspace);
-  // The neighbours' estimates are the coarsest scale's; the current frame's, this scale's.
-  Bandwidths own = workspace.run.bandwidths.empty() ? Bandwidths{} : workspace.run.bandwidths.front();
-  workspace.run.bandwidths = coarse.run.bandwidths;
-  workspace.run.frame_weights = coarse.run.frame_weights;
-  if (static_cast<int>(workspace.run.bandwidths.size()) > center)
-    workspace.run.bandwidths[center] = own;
+  // The finest scale: the one-scale filter on the current frame with the coarser scales'
+  // corrections (and its temporal neighbours as they are).
+  std::vector<const Grid*> carried = frames;
+  carried[center] = &workspace.carried;
+  runOneScale(carried, center, oneScaleParameters(parameters), viewpoint, active, workspace);
 }
 
 } // namespace detail

@@ -48,11 +48,17 @@ int
 usableScales(const Grid& input, const FilterParameters& parameters);
 /// The multiscale run with `scales` > 1 scales: the frames reduced to half size (2 x 2 blocks,
 /// each the mean of its points on one surface), filtered there (recursively, `scales` - 1
-/// scales), the current frame's range corrections carried up along the rays and one contiguous
-/// pass on the current frame. Reduction and carry are timed as Stage::pyramid. (multiscale.cpp)
+/// scales, contiguous windows unless a dilation is given), the current frame's range
+/// corrections carried up along the rays, then runOneScale on it. Reduction and carry are timed
+/// as Stage::pyramid. (multiscale.cpp)
 void
 runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
               const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace, int scales);
+/// The filter at one scale: the dilated passes with the dilation chooseDilation gives, else
+/// runContiguous. (pipeline.cpp)
+void
+runOneScale(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+            const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
 /// The filter with contiguous windows: the stages below, `iterations` times. (pipeline.cpp)
 void
 runContiguous(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
