@@ -727,6 +727,42 @@ TEST(RosNodelet, ANodeletWithABadParameterFailsItsLoad)
   EXPECT_TRUE(manager.running());
 }
 
+
+TEST(RosLaunch, TheLaunchFileStartsTheNodeWithPrivateParametersAndTheCameraTopics)
+{
+  // Parameters left by an earlier run (here a misspelt one, which the node would refuse) are
+  // cleared when the launch file starts the node.
+  ros::param::set("/rnlm_launch/serch_window", 7);
+  const std::string devel = RANGE_NLM_ROS_DEVEL_PREFIX;
+  ::setenv("CMAKE_PREFIX_PATH", devel.c_str(), 1);
+  ::setenv("ROS_PACKAGE_PATH", (devel + "/share:/usr/share").c_str(), 1);
+  ChildProcess launch({"roslaunch", devel + "/share/range_nlm/launch/range_nlm.launch", "name:=rnlm_launch",
+                       "points:=/launched/points", "search_window:=7", "patch:=3", "outlier_sigmas:=2.5"},
+                      g_master->directory() + "/rnlm_launch.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/launched/points", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/launched/points_filtered");
+  ASSERT_TRUE(waitFor([&] { return hasSubscriber(input) && output.publishers() > 0; })) << readLog(launch.log());
+  EXPECT_FALSE(ros::param::has("/rnlm_launch/serch_window"));
+  double sigmas = 0.0;
+  EXPECT_TRUE(ros::param::get("/rnlm_launch/outlier_sigmas", sigmas));
+  EXPECT_EQ(sigmas, 2.5);
+  EXPECT_FALSE(ros::param::has("/range_nlm/outlier_sigmas")); // nothing outside the node's namespace
+
+  // The launch file's live default: radius 1, causal, along the line of sight.
+  FilterParameters p = testParameters();
+  p.outlier_sigmas = 2.5f;
+  p.displacement = Displacement::line_of_sight;
+  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::causal, p);
+  for (int k = 0; k < 2; ++k) {
+    const Cloud::Ptr cloud = frame(30 + k);
+    input.publish(toPointCloud2(*cloud, 70 + k, 0));
+    const auto out = output.next();
+    ASSERT_TRUE(out) << readLog(launch.log());
+    EXPECT_EQ(compareXyz(xyzOf(*out), *expected.push(cloud)[0]), "");
+  }
+}
+
 } // namespace
 
 int
