@@ -16,7 +16,8 @@ packages=(cmake g++ make libpcl-dev pcl-tools libeigen3-dev libflann-dev libboos
           # the command-line tools docs/ros.md uses (roscore, roslaunch, rosrun, rostopic, rosbag,
           # rosnode, rosparam, dynparam) and the camera-rate benchmark
           python3-roslaunch rosbash python3-rostopic python3-rosbag python3-rospy python3-rosnode
-          python3-rosparam python3-dynamic-reconfigure python3-diagnostic-msgs image-transport-tools)
+          python3-rosparam python3-dynamic-reconfigure python3-diagnostic-msgs python3-sensor-msgs
+          image-transport-tools)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

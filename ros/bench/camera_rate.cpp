@@ -139,7 +139,8 @@ play(const std::string& path, const std::string& input, const std::string& outpu
   ros::AsyncSpinner spinner(1);
   spinner.start();
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(30.0);
-  while ((publisher.getNumSubscribers() == 0 || subscriber.getNumPublishers() == 0) && ros::WallTime::now() < deadline)
+  // The nodelet subscribes its input once it sees this subscriber of its output (lazy).
+  while (publisher.getNumSubscribers() == 0 && ros::WallTime::now() < deadline)
     ros::WallDuration(0.05).sleep();
   if (publisher.getNumSubscribers() == 0)
     throw std::runtime_error("nobody subscribes " + input + " (is the nodelet loaded?)");
