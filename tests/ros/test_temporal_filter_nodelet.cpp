@@ -349,8 +349,10 @@ TEST(RosParameters, FractionalValuesAreReadAsDoublesAndIntegersAsIntegers)
   ros::param::set("/rnlm_fraction/patch_gate", 4); // an int for a fractional parameter
   ros::param::set("/rnlm_fraction/preset", std::string("paper"));
   ros::param::set("/rnlm_fraction/search_window", 9.0); // an integral double
+  ros::param::set("/rnlm_fraction/distance_bandwidth", 0.005);
   const FilterParameters p = range_nlm_ros::filterParametersFromParameters(ros::NodeHandle("/rnlm_fraction"));
   EXPECT_EQ(p.outlier_sigmas, 2.5f);
+  EXPECT_EQ(p.distance_bandwidth, 0.005f);
   EXPECT_EQ(p.patch_edge_gate, 4.0f);
   EXPECT_EQ(p.search_window, 9);
   EXPECT_EQ(p.patch_size, FilterParameters::paper().patch_size);
