@@ -247,6 +247,7 @@ nodeSettingsFromParameters(const ros::NodeHandle& node)
   readParameter(node, "preset", settings.preset, "a string");
   readParameter(node, "input", settings.input, "a string");
   readParameter(node, "queue_size", settings.queue_size, "an integer");
+  readParameter(node, "image_transport", settings.image_transport, "a string");
   if (settings.input != "points" && settings.input != "depth")
     throw std::invalid_argument("parameter ~input must be 'points' or 'depth', got '" + settings.input + "'");
   if (settings.queue_size < 1)

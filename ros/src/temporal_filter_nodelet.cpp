@@ -23,6 +23,8 @@ TemporalFilterNodelet::onInit()
   restartStreams();
   statistics_ = FrameStatistics(ros::WallTime::now().toSec());
   transport_ = std::make_unique<image_transport::ImageTransport>(private_node);
+  if (settings_.input == "depth")
+    checkTransport();
   input_topic_ = private_node.resolveName(settings_.input == "points" ? "input" : "depth/image");
   for (const std::string& line : describeSettings(settings_))
     NODELET_INFO("%s", line.c_str());
@@ -35,6 +37,24 @@ TemporalFilterNodelet::onInit()
   reconfigure_ = std::make_unique<ParameterReconfigure>(private_node, settings_.stream,
                                                         [this](const StreamSettings& s) { reconfigure(s); });
   advertise();
+}
+
+void
+TemporalFilterNodelet::checkTransport() const
+{
+  const std::string& wanted = settings_.image_transport;
+  std::string loadable;
+  for (const std::string& name : transport_->getLoadableTransports()) {
+    // Plugin names are "image_transport/raw", "compressed_depth_image_transport/compressedDepth"...
+    const std::string transport = name.substr(name.rfind('/') + 1);
+    if (transport == wanted || transport == wanted + "_sub")
+      return;
+    loadable += (loadable.empty() ? "" : ", ") + transport;
+  }
+  const std::string message = "parameter ~image_transport = '" + wanted +
+                              "': no such image_transport plugin is installed (installed: " + loadable + ")";
+  NODELET_ERROR("%s", message.c_str());
+  throw std::invalid_argument(message);
 }
 
 void
@@ -72,7 +92,7 @@ TemporalFilterNodelet::onConnectionChange()
       input_ = private_node.subscribe("input", queue, &TemporalFilterNodelet::onPointCloud, this);
     else
       camera_input_ = transport_->subscribeCamera("depth/image", queue, &TemporalFilterNodelet::onDepthImage, this,
-                                                  image_transport::TransportHints("raw", ros::TransportHints(),
+                                                  image_transport::TransportHints(settings_.image_transport, ros::TransportHints(),
                                                                                   private_node));
     subscribed_ = true;
     NODELET_DEBUG("output subscribed: subscribing %s", input_topic_.c_str());

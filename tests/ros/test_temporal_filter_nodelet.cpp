@@ -726,6 +726,20 @@ TEST(RosNodelet, ANodeletWithABadParameterFailsItsLoad)
             std::string::npos)
       << readLog(manager.log());
   EXPECT_FALSE(advertised("/rnlm_refused/output"));
+
+  // A depth transport whose image_transport plugin is not installed fails the load too.
+  ros::param::set("/rnlm_no_plugin/input", std::string("depth"));
+  ros::param::set("/rnlm_no_plugin/image_transport", std::string("noSuchTransport"));
+  ChildProcess plugin_loader({RANGE_NLM_NODELET_EXECUTABLE, "load", "range_nlm/TemporalFilterNodelet",
+                              "rnlm_manager2", "__name:=rnlm_no_plugin"},
+                             g_master->directory() + "/rnlm_no_plugin.log");
+  const int plugin_status = plugin_loader.waitExit(30.0);
+  EXPECT_NE(plugin_status, -1);
+  EXPECT_NE(plugin_status, 0);
+  EXPECT_NE(readLog(manager.log()).find("parameter ~image_transport = 'noSuchTransport': no such image_transport "
+                                        "plugin is installed (installed: raw"),
+            std::string::npos)
+      << readLog(manager.log());
   EXPECT_TRUE(manager.running());
 }
 

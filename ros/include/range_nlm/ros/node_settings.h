@@ -37,6 +37,8 @@ struct NodeSettings
   std::string input = "points";
   /// Subscriber and publisher queues (>= 1).
   int queue_size = 2;
+  /// image_transport of the depth input ("raw", "compressedDepth", ...).
+  std::string image_transport = "raw";
   /// The preset the parameters start from.
   std::string preset = "default";
   /// The private parameters that were set, by their names (without "~"), in the order read.

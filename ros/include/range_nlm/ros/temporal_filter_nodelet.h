@@ -49,6 +49,8 @@ private:
   using DepthStream = TaggedStream<DepthTag>;
 
   void onInit() override;
+  /// Throws std::invalid_argument if ~image_transport names no installed plugin.
+  void checkTransport() const;
   void advertise();
   /// Subscribes the input when the output gains its first subscriber and unsubscribes it (and
   /// restarts the window) when the last one leaves.
