@@ -2,8 +2,9 @@
 # The camera-rate benchmark of the ROS nodelet: a real master, a nodelet manager with
 # range_nlm/TemporalFilterNodelet loaded, and a VGA bag (the frames of data/kinect-sequence,
 # looped) replayed at 30 Hz, each message stamped when it is sent. Prints, per mode (static
-# default, causal radius 1, recursive radius 1): output rate, latency from stamp to receipt
-# (median, 95th percentile), frames dropped and how old the previous output's frame is.
+# default, causal radius 1, recursive radius 1, static with queue_size 1): output rate, latency
+# from stamp to receipt (median, 95th percentile), frames dropped and how old the previous
+# output's frame is.
 #
 #   ros/bench/camera_rate.sh [BUILD_DIR [SECONDS [RATE_HZ]]]      (defaults: build 10 30)
 #
@@ -66,3 +67,5 @@ run_mode() {
 run_mode static _temporal_radius:=0
 run_mode causal _temporal_radius:=1 _causal:=true
 run_mode recursive _temporal_radius:=1 _recursive:=true
+# The same static default with a queue of one frame: the newest frame only, the lowest latency.
+run_mode static_queue1 _temporal_radius:=0 _queue_size:=1
