@@ -88,12 +88,13 @@ TemporalFilterNodelet::onConnectionChange()
   if (listeners > 0 && !subscribed_) {
     const int queue = settings_.queue_size;
     ros::NodeHandle& private_node = getPrivateNodeHandle();
-    if (settings_.input == "points")
+    if (settings_.input == "points") {
       input_ = private_node.subscribe("input", queue, &TemporalFilterNodelet::onPointCloud, this);
-    else
-      camera_input_ = transport_->subscribeCamera("depth/image", queue, &TemporalFilterNodelet::onDepthImage, this,
-                                                  image_transport::TransportHints(settings_.image_transport, ros::TransportHints(),
-                                                                                  private_node));
+    } else {
+      const image_transport::TransportHints hints(settings_.image_transport, ros::TransportHints(), private_node);
+      camera_input_ =
+          transport_->subscribeCamera("depth/image", queue, &TemporalFilterNodelet::onDepthImage, this, hints);
+    }
     subscribed_ = true;
     NODELET_DEBUG("output subscribed: subscribing %s", input_topic_.c_str());
   } else if (listeners == 0 && subscribed_) {

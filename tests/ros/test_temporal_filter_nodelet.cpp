@@ -632,7 +632,8 @@ std::string
 diagnosticValue(const diagnostic_msgs::DiagnosticArray& array, const std::string& name, const std::string& key)
 {
   for (const auto& status : array.status)
-    if (status.name.size() >= name.size() && status.name.compare(status.name.size() - name.size(), name.size(), name) == 0)
+    if (status.name.size() >= name.size() &&
+        status.name.compare(status.name.size() - name.size(), name.size(), name) == 0)
       for (const auto& value : status.values)
         if (value.key == key)
           return value.value;
@@ -776,6 +777,22 @@ TEST(RosLaunch, TheLaunchFileStartsTheNodeWithPrivateParametersAndTheCameraTopic
     const auto out = output.next();
     ASSERT_TRUE(out) << readLog(launch.log());
     EXPECT_EQ(compareXyz(xyzOf(*out), *expected.push(cloud)[0]), "");
+  }
+}
+
+
+TEST(RosLaunch, TheLaunchFileHasAnArgAndAPrivateParameterForEveryParameter)
+{
+  const std::string launch =
+      readLog(std::string(RANGE_NLM_ROS_DEVEL_PREFIX) + "/share/range_nlm/launch/range_nlm.launch");
+  ASSERT_FALSE(launch.empty());
+  const std::size_t node = launch.find("<node ");
+  ASSERT_NE(node, std::string::npos);
+  for (const std::string& name : range_nlm_ros::knownParameterNames()) {
+    EXPECT_NE(launch.find("<arg name=\"" + name + "\""), std::string::npos) << name;
+    // Inside the node element: a private parameter.
+    EXPECT_NE(launch.find("<param name=\"" + name + "\" value=\"$(arg " + name + ")\"", node), std::string::npos)
+        << name;
   }
 }
 
