@@ -8,7 +8,16 @@ packages=(cmake g++ make libpcl-dev pcl-tools libeigen3-dev libflann-dev libboos
           # ROS 1 (Debian's own Noetic-era packages): the nodelet, range_nlm_node, --input-bag, and
           # for their tests the master (rosmaster) and a nodelet manager (libnodeletlib-tools).
           libroscpp-dev libsensor-msgs-dev libstd-msgs-dev libnodeletlib-dev libnodelet-dev pluginlib-dev
-          librosbag-storage-dev catkin python3-rosmaster libnodeletlib-tools)
+          librosbag-storage-dev catkin python3-rosmaster libnodeletlib-tools
+          # image_transport's CameraSubscriber / CameraPublisher, message_filters, live
+          # reconfiguration and diagnostics of the nodelet
+          libimage-transport-dev libmessage-filters-dev libdynamic-reconfigure-config-init-mutex-dev
+          libdiagnostic-updater-dev
+          # the command-line tools docs/ros.md uses (roscore, roslaunch, rosrun, rostopic, rosbag,
+          # rosnode, rosparam, dynparam) and the camera-rate benchmark
+          python3-roslaunch rosbash python3-rostopic python3-rosbag python3-rospy python3-rosnode
+          python3-rosparam python3-dynamic-reconfigure python3-diagnostic-msgs python3-sensor-msgs
+          image-transport-tools)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

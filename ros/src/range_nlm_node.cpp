@@ -1,10 +1,11 @@
 // range_nlm_node: the nodelet range_nlm/TemporalFilterNodelet run as a node of its own (same
-// topics and private parameters), for use without a nodelet manager.
+// private topics and parameters), for use without a nodelet manager.
 #include <range_nlm/ros/temporal_filter_nodelet.h>
 
 #include <ros/ros.h>
 
 #include <cstdio>
+#include <exception>
 
 int
 main(int argc, char** argv)
@@ -14,9 +15,11 @@ main(int argc, char** argv)
   ros::init(argc, argv, "range_nlm");
   range_nlm_ros::TemporalFilterNodelet filter;
   const nodelet::V_string my_argv(argv + 1, argv + argc);
-  filter.init(ros::this_node::getName(), ros::names::getRemappings(), my_argv);
-  if (!filter.configured())
-    return 1;
+  try {
+    filter.init(ros::this_node::getName(), ros::names::getRemappings(), my_argv);
+  } catch (const std::exception&) {
+    return 1; // the nodelet logged why
+  }
   // The filter takes most of a frame's time: one thread for callbacks keeps frames in order.
   ros::spin();
   return 0;

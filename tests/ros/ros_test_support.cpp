@@ -75,10 +75,20 @@ ChildProcess::running()
     return false;
   int status = 0;
   if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     pid_ = -1;
     return false;
   }
   return true;
+}
+
+int
+ChildProcess::waitExit(double seconds)
+{
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (running() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  return running() ? -1 : status_;
 }
 
 void

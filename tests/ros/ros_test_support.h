@@ -28,12 +28,16 @@ public:
   ChildProcess& operator=(const ChildProcess&) = delete;
   /// Still running?
   bool running();
+  /// Waits up to `seconds` for the process to end: its exit status (128 + signal if killed by
+  /// one), or -1 if it still runs.
+  int waitExit(double seconds);
   void stop();
   const std::string& log() const { return log_; }
   pid_t pid() const { return pid_; }
 
 private:
   pid_t pid_ = -1;
+  int status_ = -1;
   std::string log_;
 };
 

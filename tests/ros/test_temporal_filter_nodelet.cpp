@@ -1,15 +1,19 @@
 // The nodelet against a real ROS master: range_nlm_node and a nodelet manager with the plugin
 // loaded, fed PointCloud2 and depth image messages; outputs equal the library's TemporalStream on
-// the same frames, bad messages are dropped with a log line naming their stamp.
+// the same frames, bad messages are dropped with a log line naming their stamp. Also: private
+// topics, lazy subscription, reconfiguration between frames, diagnostics, depth and CameraInfo
+// paired by stamp, parameters read by type, misspelt parameters and a failed nodelet load.
 #include "parameter_values.h"
 #include "ros_test_support.h"
 #include "test_support.h"
 
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/parameter_registry.h>
-#include <range_nlm/ros/temporal_filter_nodelet.h>
+#include <range_nlm/ros/node_settings.h>
 #include <range_nlm/temporal_stream.h>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -155,7 +159,7 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
   ros::param::set("/rnlm_points/temporal_radius", 1);
   ros::param::set("/rnlm_points/search_window", 7);
   ros::param::set("/rnlm_points/patch", 3);
-  ChildProcess node({nodeExecutable(), "__name:=rnlm_points", "input:=/rnlm/in", "output:=/rnlm/out"},
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_points", "~input:=/rnlm/in", "~output:=/rnlm/out"},
                     g_master->directory() + "/rnlm_points.log");
   ros::NodeHandle nh;
   ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/rnlm/in", 10);
@@ -219,6 +223,12 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
   EXPECT_NE(readLog(node.log()).find("temporal window restarted"), std::string::npos);
   EXPECT_TRUE(node.running()) << readLog(node.log());
   EXPECT_EQ(output.pending(), 0u);
+  // The start-up log states the whole setting, the given parameters marked.
+  EXPECT_NE(log.find("preset 'default', temporal radius 1 (set), causal window, points move along the line of "
+                     "sight (automatic)"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find(" search_window=7 (set) patch=3 (set) dilation=0 "), std::string::npos) << log;
 }
 
 TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
@@ -234,7 +244,7 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
   ros::param::set("/rnlm_centred/outlier_sigmas", 0.0);
   // A tighter patch gate than the default's 18 sigmas changes the points around those outliers.
   ros::param::set("/rnlm_centred/patch_gate", 4.0);
-  ChildProcess node({nodeExecutable(), "__name:=rnlm_centred", "input:=/centred/in", "output:=/centred/out"},
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_centred", "~input:=/centred/in", "~output:=/centred/out"},
                     g_master->directory() + "/rnlm_centred.log");
   ros::NodeHandle nh;
   ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/centred/in", 10);
@@ -339,8 +349,10 @@ TEST(RosParameters, FractionalValuesAreReadAsDoublesAndIntegersAsIntegers)
   ros::param::set("/rnlm_fraction/patch_gate", 4); // an int for a fractional parameter
   ros::param::set("/rnlm_fraction/preset", std::string("paper"));
   ros::param::set("/rnlm_fraction/search_window", 9.0); // an integral double
+  ros::param::set("/rnlm_fraction/distance_bandwidth", 0.005);
   const FilterParameters p = range_nlm_ros::filterParametersFromParameters(ros::NodeHandle("/rnlm_fraction"));
   EXPECT_EQ(p.outlier_sigmas, 2.5f);
+  EXPECT_EQ(p.distance_bandwidth, 0.005f);
   EXPECT_EQ(p.patch_edge_gate, 4.0f);
   EXPECT_EQ(p.search_window, 9);
   EXPECT_EQ(p.patch_size, FilterParameters::paper().patch_size);
@@ -367,6 +379,35 @@ TEST(RosParameters, BadValuesAreRefusedNamingTheParameter)
   ros::param::set("/rnlm_bad7/normal_window", 4);
   EXPECT_NE(rosRefusal("/rnlm_bad7").find("parameter ~normal_window: range_nlm: parameter normal_window = 4"),
             std::string::npos);
+  ros::param::set("/rnlm_bad8/outlier_sigmas", std::string("2.5")); // a string for a number
+  EXPECT_EQ(rosRefusal("/rnlm_bad8"), "parameter ~outlier_sigmas must be a number, got '<value>2.5</value>'");
+}
+
+/// What nodeSettingsFromParameters refuses in namespace `ns` ("" if nothing).
+std::string
+nodeRefusal(const std::string& ns)
+{
+  try {
+    range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle(ns));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RosParameters, AMisspeltParameterIsRefusedWithTheNearestName)
+{
+  ros::param::set("/rnlm_typo/search_window", 7);
+  ros::param::set("/rnlm_typo/outlier_sigmas", 2.5);
+  ros::param::set("/rnlm_typo/image_transport", std::string("raw")); // image_transport's own
+  EXPECT_EQ(nodeRefusal("/rnlm_typo"), "");
+  ros::param::set("/rnlm_typo/temporal_raduis", 1);
+  EXPECT_EQ(nodeRefusal("/rnlm_typo"),
+            "unknown parameter ~temporal_raduis (did you mean ~temporal_radius?); the parameters are listed in "
+            "docs/ros.md");
+  ros::param::del("/rnlm_typo/temporal_raduis");
+  ros::param::set("/rnlm_typo/colour", std::string("red"));
+  EXPECT_EQ(nodeRefusal("/rnlm_typo"), "unknown parameter ~colour; the parameters are listed in docs/ros.md");
 }
 
 /// The 16UC1 image of a cloud's z (millimetres, 0 = no depth).
@@ -402,9 +443,11 @@ depth32(const Cloud& cloud, std::uint32_t sec)
 }
 
 sensor_msgs::CameraInfo
-cameraInfo(int w, int h)
+cameraInfo(int w, int h, std::uint32_t sec)
 {
   sensor_msgs::CameraInfo info;
+  info.header.stamp.sec = sec;
+  info.header.frame_id = "camera_depth_optical_frame";
   info.width = w;
   info.height = h;
   info.K = {300.0, 0.0, (w - 1) / 2.0, 0.0, 300.0, (h - 1) / 2.0, 0.0, 0.0, 1.0};
@@ -425,15 +468,16 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   manager_command.insert(manager_command.begin(), {"env", "LD_PRELOAD=" RANGE_NLM_ASAN_RUNTIME});
 #endif
   ChildProcess manager(manager_command, g_master->directory() + "/rnlm_manager.log");
+  // Remapping the image remaps its CameraInfo too (image_transport: the sibling camera_info).
   ChildProcess loader({RANGE_NLM_NODELET_EXECUTABLE, "load", "range_nlm/TemporalFilterNodelet", "rnlm_manager",
-                       "__name:=rnlm_depth", "depth/image:=/cam/depth/image", "depth/camera_info:=/cam/depth/info",
-                       "depth_filtered/image:=/cam/filtered/image", "depth_filtered/camera_info:=/cam/filtered/info"},
+                       "__name:=rnlm_depth", "~depth/image:=/cam/depth/image",
+                       "~depth_filtered/image:=/cam/filtered/image"},
                       g_master->directory() + "/rnlm_load.log");
   ros::NodeHandle nh;
   ros::Publisher images = nh.advertise<sensor_msgs::Image>("/cam/depth/image", 10);
-  ros::Publisher infos = nh.advertise<sensor_msgs::CameraInfo>("/cam/depth/info", 10, true);
+  ros::Publisher infos = nh.advertise<sensor_msgs::CameraInfo>("/cam/depth/camera_info", 10);
   Inbox<sensor_msgs::Image> output("/cam/filtered/image");
-  Inbox<sensor_msgs::CameraInfo> output_info("/cam/filtered/info");
+  Inbox<sensor_msgs::CameraInfo> output_info("/cam/filtered/camera_info");
   ASSERT_TRUE(waitFor([&] {
     return images.getNumSubscribers() > 0 && infos.getNumSubscribers() > 0 && output.publishers() > 0 &&
            output_info.publishers() > 0;
@@ -442,8 +486,7 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
 
   // 16UC1 millimetres: the library's back-projection, stream and encoding.
   const int w = 64, h = 48;
-  infos.publish(cameraInfo(w, h));
-  ros::Duration(0.3).sleep(); // the latched info reaches the nodelet before the first image
+  const int w2 = 40, h2 = 30;
   DepthIntrinsics intrinsics;
   intrinsics.fx = intrinsics.fy = 300.0;
   intrinsics.cx = (w - 1) / 2.0;
@@ -452,12 +495,18 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   TemporalStream<pcl::PointXYZ> stream16(1, TemporalWindow::causal, testParameters());
   for (int k = 0; k < 3; ++k) {
     const sensor_msgs::Image in = depth16(*frame(k), 200 + k);
+    // Each image is paired with the CameraInfo of its stamp, whichever came last: here the
+    // next image's (of another size) comes before this one's.
+    if (k == 2)
+      infos.publish(cameraInfo(w2, h2, 300));
     images.publish(in);
+    infos.publish(cameraInfo(w, h, 200 + k));
     if (k == 1) { // a colour image on the depth topic is dropped; the next depth image goes on
       sensor_msgs::Image rgb = in;
       rgb.encoding = "rgb8";
       rgb.header.stamp.sec = 777;
       images.publish(rgb);
+      infos.publish(cameraInfo(w, h, 777));
     }
     const auto out = output.next();
     ASSERT_TRUE(out) << readLog(manager.log());
@@ -483,14 +532,13 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   EXPECT_NE(readLog(manager.log()).find("encoding 'rgb8' is not supported"), std::string::npos);
 
   // 32FC1 metres of another size: a new window; x = (u - cx) z / fx, y = (v - cy) z / fy.
-  const int w2 = 40, h2 = 30;
-  infos.publish(cameraInfo(w2, h2));
-  ros::Duration(0.3).sleep();
   TemporalStream<pcl::PointXYZ> stream32(1, TemporalWindow::causal, testParameters());
   for (int k = 0; k < 2; ++k) {
     const Cloud::Ptr source = frame(10 + k, w2, h2);
     const sensor_msgs::Image in = depth32(*source, 300 + k);
     images.publish(in);
+    if (k > 0)
+      infos.publish(cameraInfo(w2, h2, 300 + k));
     const auto out = output.next();
     ASSERT_TRUE(out) << readLog(manager.log());
     EXPECT_EQ(out->encoding, "32FC1");
@@ -520,6 +568,232 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
     }
   }
   EXPECT_TRUE(manager.running()) << readLog(manager.log());
+}
+
+
+/// Someone subscribes `topic` (as the master knows it).
+bool
+hasSubscriber(const ros::Publisher& publisher)
+{
+  return publisher.getNumSubscribers() > 0;
+}
+
+/// The master lists `topic` as published.
+bool
+advertised(const std::string& topic)
+{
+  ros::master::V_TopicInfo topics;
+  ros::master::getTopics(topics);
+  for (const auto& t : topics)
+    if (t.name == topic)
+      return true;
+  return false;
+}
+
+TEST(RosNode, TwoInstancesInOneNamespaceSubscribeOnlyWhileTheirOutputIsWanted)
+{
+  // Two nodes in /twins with their default private topics: /twins/twin_a/input -> output, ...
+  for (const char* name : {"/twins/twin_a", "/twins/twin_b"}) {
+    ros::param::set(std::string(name) + "/search_window", 7);
+    ros::param::set(std::string(name) + "/patch", 3);
+  }
+  ros::param::set("/twins/twin_b/outlier_sigmas", 2.5);
+  ChildProcess a({nodeExecutable(), "__ns:=/twins", "__name:=twin_a"}, g_master->directory() + "/twin_a.log");
+  ChildProcess b({nodeExecutable(), "__ns:=/twins", "__name:=twin_b"}, g_master->directory() + "/twin_b.log");
+  ros::NodeHandle nh;
+  ros::Publisher input_a = nh.advertise<sensor_msgs::PointCloud2>("/twins/twin_a/input", 10);
+  ros::Publisher input_b = nh.advertise<sensor_msgs::PointCloud2>("/twins/twin_b/input", 10);
+  ASSERT_TRUE(waitFor([&] { return advertised("/twins/twin_a/output") && advertised("/twins/twin_b/output"); }))
+      << readLog(a.log()) << readLog(b.log());
+  // Nobody listens: neither subscribes its input.
+  ros::WallDuration(0.5).sleep();
+  EXPECT_FALSE(hasSubscriber(input_a));
+  EXPECT_FALSE(hasSubscriber(input_b));
+  {
+    Inbox<sensor_msgs::PointCloud2> output_b("/twins/twin_b/output");
+    ASSERT_TRUE(waitFor([&] { return hasSubscriber(input_b); })) << readLog(b.log());
+    EXPECT_FALSE(hasSubscriber(input_a)); // only the instance whose output is wanted
+    const Cloud::Ptr cloud = frame(5);
+    input_b.publish(toPointCloud2(*cloud, 40, 0));
+    const auto out = output_b.next();
+    ASSERT_TRUE(out) << readLog(b.log());
+    FilterParameters p = testParameters();
+    p.outlier_sigmas = 2.5f;
+    TemporalStream<pcl::PointXYZ> expected(0, TemporalWindow::causal, p);
+    EXPECT_EQ(compareXyz(xyzOf(*out), *expected.push(cloud)[0]), "");
+  }
+  // The last subscriber left: the input is unsubscribed again.
+  EXPECT_TRUE(waitFor([&] { return !hasSubscriber(input_b); })) << readLog(b.log());
+  EXPECT_TRUE(a.running() && b.running());
+}
+
+/// The value of `key` in the diagnostics status whose name ends with `name`, or "".
+std::string
+diagnosticValue(const diagnostic_msgs::DiagnosticArray& array, const std::string& name, const std::string& key)
+{
+  for (const auto& status : array.status)
+    if (status.name.size() >= name.size() &&
+        status.name.compare(status.name.size() - name.size(), name.size(), name) == 0)
+      for (const auto& value : status.values)
+        if (value.key == key)
+          return value.value;
+  return "";
+}
+
+TEST(RosNode, ReconfiguringABandwidthBetweenTwoFramesChangesTheOutputAndDiagnosticsArePublished)
+{
+  ros::param::set("/rnlm_live/search_window", 7);
+  ros::param::set("/rnlm_live/patch", 3);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_live"}, g_master->directory() + "/rnlm_live.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/rnlm_live/input", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/rnlm_live/output");
+  Inbox<diagnostic_msgs::DiagnosticArray> diagnostics("/diagnostics");
+  ASSERT_TRUE(waitFor([&] { return hasSubscriber(input) && output.publishers() > 0; })) << readLog(node.log());
+  ASSERT_TRUE(ros::service::waitForService("/rnlm_live/set_parameters", 20000));
+
+  const Cloud::Ptr cloud = frame(7);
+  TemporalStream<pcl::PointXYZ> before(0, TemporalWindow::causal, testParameters());
+  input.publish(toPointCloud2(*cloud, 60, 0));
+  auto out = output.next();
+  ASSERT_TRUE(out) << readLog(node.log());
+  const Cloud automatic = *before.push(cloud)[0];
+  EXPECT_EQ(compareXyz(xyzOf(*out), automatic), "");
+
+  dynamic_reconfigure::Reconfigure change;
+  dynamic_reconfigure::DoubleParameter d;
+  d.name = "distance_bandwidth";
+  d.value = 0.002;
+  change.request.config.doubles.push_back(d);
+  ASSERT_TRUE(ros::service::call("/rnlm_live/set_parameters", change));
+  bool reported = false;
+  for (const auto& value : change.response.config.doubles)
+    reported = reported || (value.name == "distance_bandwidth" && std::fabs(value.value - 0.002) < 1e-9);
+  EXPECT_TRUE(reported);
+
+  // The same frame again: now filtered with d = 0.002.
+  FilterParameters narrow = testParameters();
+  narrow.distance_bandwidth = 0.002f;
+  TemporalStream<pcl::PointXYZ> after(0, TemporalWindow::causal, narrow);
+  input.publish(toPointCloud2(*cloud, 61, 0));
+  out = output.next();
+  ASSERT_TRUE(out) << readLog(node.log());
+  const Cloud expected = *after.push(cloud)[0];
+  EXPECT_EQ(compareXyz(xyzOf(*out), expected), "");
+  EXPECT_NE(compareXyz(expected, automatic), ""); // the change is visible
+
+  // A value out of range is refused, and the setting stays.
+  dynamic_reconfigure::Reconfigure bad;
+  dynamic_reconfigure::IntParameter window;
+  window.name = "search_window";
+  window.value = 8;
+  bad.request.config.ints.push_back(window);
+  ASSERT_TRUE(ros::service::call("/rnlm_live/set_parameters", bad));
+  for (const auto& value : bad.response.config.ints)
+    if (value.name == "search_window")
+      EXPECT_EQ(value.value, 7);
+  EXPECT_TRUE(waitFor([&] { return readLog(node.log()).find("search_window = 8 is invalid") != std::string::npos; }));
+
+  // Diagnostics: the frames published, the bandwidth the filter used.
+  bool seen = false;
+  for (int i = 0; i < 30 && !seen; ++i) {
+    const auto array = diagnostics.next(5.0);
+    ASSERT_TRUE(array) << "no diagnostics\n" << readLog(node.log());
+    seen = diagnosticValue(*array, "rnlm_live: filter", "frames published in all") == "2";
+    if (seen) {
+      EXPECT_EQ(diagnosticValue(*array, "rnlm_live: filter", "distance bandwidth d"), "0.002");
+      EXPECT_EQ(diagnosticValue(*array, "rnlm_live: filter", "subscribed"), "True");
+    }
+  }
+  EXPECT_TRUE(seen);
+}
+
+TEST(RosNodelet, ANodeletWithABadParameterFailsItsLoad)
+{
+  ::setenv("AMENT_PREFIX_PATH", RANGE_NLM_ROS_DEVEL_PREFIX, 1);
+  ros::param::set("/rnlm_refused/patch_gate", std::string("high"));
+  std::vector<std::string> manager_command = {RANGE_NLM_NODELET_EXECUTABLE, "manager", "__name:=rnlm_manager2"};
+#ifdef RANGE_NLM_ASAN_RUNTIME
+  manager_command.insert(manager_command.begin(), {"env", "LD_PRELOAD=" RANGE_NLM_ASAN_RUNTIME});
+#endif
+  ChildProcess manager(manager_command, g_master->directory() + "/rnlm_manager2.log");
+  ChildProcess loader({RANGE_NLM_NODELET_EXECUTABLE, "load", "range_nlm/TemporalFilterNodelet", "rnlm_manager2",
+                       "__name:=rnlm_refused"},
+                      g_master->directory() + "/rnlm_refused.log");
+  const int status = loader.waitExit(30.0);
+  EXPECT_NE(status, -1) << "nodelet load still runs\n" << readLog(loader.log());
+  EXPECT_NE(status, 0) << readLog(loader.log());
+  EXPECT_NE(readLog(manager.log()).find("parameter ~patch_gate must be a number, got '<value>high</value>'"),
+            std::string::npos)
+      << readLog(manager.log());
+  EXPECT_FALSE(advertised("/rnlm_refused/output"));
+
+  // A depth transport whose image_transport plugin is not installed fails the load too.
+  ros::param::set("/rnlm_no_plugin/input", std::string("depth"));
+  ros::param::set("/rnlm_no_plugin/image_transport", std::string("noSuchTransport"));
+  ChildProcess plugin_loader({RANGE_NLM_NODELET_EXECUTABLE, "load", "range_nlm/TemporalFilterNodelet",
+                              "rnlm_manager2", "__name:=rnlm_no_plugin"},
+                             g_master->directory() + "/rnlm_no_plugin.log");
+  const int plugin_status = plugin_loader.waitExit(30.0);
+  EXPECT_NE(plugin_status, -1);
+  EXPECT_NE(plugin_status, 0);
+  EXPECT_NE(readLog(manager.log()).find("parameter ~image_transport = 'noSuchTransport': no such image_transport "
+                                        "plugin is installed (installed: raw"),
+            std::string::npos)
+      << readLog(manager.log());
+  EXPECT_TRUE(manager.running());
+}
+
+
+TEST(RosLaunch, TheLaunchFileStartsTheNodeWithPrivateParametersAndTheCameraTopics)
+{
+  // Parameters left by an earlier run (here a misspelt one, which the node would refuse) are
+  // cleared when the launch file starts the node.
+  ros::param::set("/rnlm_launch/serch_window", 7);
+  const std::string devel = RANGE_NLM_ROS_DEVEL_PREFIX;
+  ::setenv("CMAKE_PREFIX_PATH", devel.c_str(), 1);
+  ::setenv("ROS_PACKAGE_PATH", (devel + "/share:/usr/share").c_str(), 1);
+  ChildProcess launch({"roslaunch", devel + "/share/range_nlm/launch/range_nlm.launch", "name:=rnlm_launch",
+                       "points:=/launched/points", "search_window:=7", "patch:=3", "outlier_sigmas:=2.5"},
+                      g_master->directory() + "/rnlm_launch.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/launched/points", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/launched/points_filtered");
+  ASSERT_TRUE(waitFor([&] { return hasSubscriber(input) && output.publishers() > 0; })) << readLog(launch.log());
+  EXPECT_FALSE(ros::param::has("/rnlm_launch/serch_window"));
+  double sigmas = 0.0;
+  EXPECT_TRUE(ros::param::get("/rnlm_launch/outlier_sigmas", sigmas));
+  EXPECT_EQ(sigmas, 2.5);
+  EXPECT_FALSE(ros::param::has("/range_nlm/outlier_sigmas")); // nothing outside the node's namespace
+
+  // The launch file's live default: radius 1, causal, along the line of sight.
+  FilterParameters p = testParameters();
+  p.outlier_sigmas = 2.5f;
+  p.displacement = Displacement::line_of_sight;
+  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::causal, p);
+  for (int k = 0; k < 2; ++k) {
+    const Cloud::Ptr cloud = frame(30 + k);
+    input.publish(toPointCloud2(*cloud, 70 + k, 0));
+    const auto out = output.next();
+    ASSERT_TRUE(out) << readLog(launch.log());
+    EXPECT_EQ(compareXyz(xyzOf(*out), *expected.push(cloud)[0]), "");
+  }
+}
+
+
+TEST(RosLaunch, TheLaunchFileHasAnArgAndAPrivateParameterForEveryParameter)
+{
+  const std::string launch =
+      readLog(std::string(RANGE_NLM_ROS_DEVEL_PREFIX) + "/share/range_nlm/launch/range_nlm.launch");
+  ASSERT_FALSE(launch.empty());
+  const std::size_t node = launch.find("<node ");
+  ASSERT_NE(node, std::string::npos);
+  for (const std::string& name : range_nlm_ros::knownParameterNames()) {
+    EXPECT_NE(launch.find("<arg name=\"" + name + "\""), std::string::npos) << name;
+    // Inside the node element: a private parameter.
+    EXPECT_NE(launch.find("<param name=\"" + name + "\" value=\"$(arg " + name + ")\"", node), std::string::npos)
+        << name;
+  }
 }
 
 } // namespace

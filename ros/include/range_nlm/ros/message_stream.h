@@ -51,6 +51,8 @@ public:
     /// Empty if filtered, else why the frame came out unchanged (e.g. too few valid points).
     std::string problem;
     double milliseconds = 0.0;
+    /// Bandwidths the filter chose for it (first iteration); zero if it was not filtered.
+    range_nlm::Bandwidths bandwidths;
   };
 
   /// Throws std::invalid_argument for invalid settings.
@@ -111,7 +113,7 @@ private:
       tags_.push_back(*pushed);
     const auto& infos = stream_->lastOutputs();
     for (std::size_t i = 0; i < ready.size(); ++i) {
-      out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds});
+      out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds, infos[i].bandwidths});
       tags_.pop_front();
     }
   }

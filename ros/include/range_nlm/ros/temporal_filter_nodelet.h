@@ -2,23 +2,30 @@
 /// \brief The nodelet range_nlm/TemporalFilterNodelet: filters an organized point cloud topic or
 /// a depth image topic, frame by frame, static or temporal.
 ///
-/// Topics (relative to the nodelet's namespace, remap them):
-///   ~input = "points" (default): subscribes `input` (sensor_msgs/PointCloud2), publishes `output`.
-///   ~input = "depth": subscribes `depth/image` (16UC1 mm or 32FC1 m) and `depth/camera_info`,
-///     publishes `depth_filtered/image` and `depth_filtered/camera_info` (the info of that image).
-/// Parameters (private): preset, and every parameter of the registry by its ROS name
-/// (parameter_registry.h; mostly range_nlm_denoise's options with '-' -> '_': search_window,
-/// patch, iterations, threads, distance_bandwidth, similarity_bandwidth, seed, normal_window,
-/// dilation, cross_frame, outlier_sigmas, patch_gate, ..., and the switches direct and
-/// line_of_sight), each of its field's type; temporal_radius, causal (default true here: no
-/// output delay), recursive; plus input and queue_size. See docs/ros.md.
+/// Topics are private (in the nodelet's own namespace, as pcl_ros's filters have them), so that
+/// two instances in one namespace do not collide:
+///   ~input = "points" (default): subscribes `~input` (sensor_msgs/PointCloud2), publishes
+///     `~output`.
+///   ~input = "depth": subscribes `~depth/image` (16UC1 mm or 32FC1 m) with its
+///     `~depth/camera_info` through image_transport's CameraSubscriber (the two paired by stamp),
+///     publishes `~depth_filtered/image` and `~depth_filtered/camera_info`.
+/// The input is subscribed only while someone subscribes to the output.
+/// Parameters (private): node_settings.h; a missing, misspelt or invalid one makes onInit throw,
+/// so that `nodelet load` fails. Live changes: parameter_reconfigure.h. Diagnostics on
+/// /diagnostics: rates, latency, drops, bandwidths (frame_statistics.h). See docs/ros.md.
 /// Output messages keep the input's header, layout and encoding; only x, y, z (or the depth)
 /// change. A message that cannot be filtered is logged (ROS_WARN, with its stamp) and dropped.
 #pragma once
 
+#include <range_nlm/ros/frame_statistics.h>
 #include <range_nlm/ros/message_frames.h>
 #include <range_nlm/ros/message_stream.h>
+#include <range_nlm/ros/node_settings.h>
+#include <range_nlm/ros/parameter_reconfigure.h>
 
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <image_transport/camera_common.h>
+#include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -27,50 +34,58 @@
 
 #include <memory>
 #include <mutex>
+#include <string>
 #include <utility>
+#include <vector>
 
 namespace range_nlm_ros
 {
 
-/// FilterParameters from a node's private parameters: the preset, overridden by every parameter
-/// of the registry the node has. Integers are read as integers (a double only with an integral
-/// value), fractional parameters as doubles (an int is taken too), enumerators by name. Throws
-/// std::invalid_argument naming the ROS parameter and the value on a wrong type or an invalid
-/// value.
-range_nlm::FilterParameters
-filterParametersFromParameters(const ros::NodeHandle& private_node);
-
-/// Reads StreamSettings from a node's private parameters (names as above). The live default is
-/// a causal window. Throws std::invalid_argument naming the parameter and the value on a wrong
-/// type or an invalid value.
-StreamSettings
-streamSettingsFromParameters(const ros::NodeHandle& private_node);
-
 class TemporalFilterNodelet : public nodelet::Nodelet
 {
-public:
-  /// False if the parameters were invalid (the error was logged; nothing is subscribed).
-  bool configured() const { return configured_; }
-
 private:
+  using CloudStream = TaggedStream<sensor_msgs::PointCloud2::ConstPtr>;
+  using DepthTag = std::pair<sensor_msgs::Image::ConstPtr, sensor_msgs::CameraInfo::ConstPtr>;
+  using DepthStream = TaggedStream<DepthTag>;
+
   void onInit() override;
+  /// Throws std::invalid_argument if ~image_transport names no installed plugin.
+  void checkTransport() const;
+  void advertise();
+  /// Subscribes the input when the output gains its first subscriber and unsubscribes it (and
+  /// restarts the window) when the last one leaves.
+  void onConnectionChange();
   void onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& message);
-  void onDepthImage(const sensor_msgs::Image::ConstPtr& image);
-  void onCameraInfo(const sensor_msgs::CameraInfo::ConstPtr& info);
+  void onDepthImage(const sensor_msgs::Image::ConstPtr& image, const sensor_msgs::CameraInfo::ConstPtr& info);
+  /// A new setting from dynamic_reconfigure: the frames still waiting come out with the old
+  /// one, then the window restarts with the new one.
+  void reconfigure(const StreamSettings& settings);
+  void restartStreams();
+  void publishClouds(const std::vector<CloudStream::Output>& ready);
+  void publishDepth(const std::vector<DepthStream::Output>& ready);
+  void dropped(const char* what, const std_msgs::Header& header, const std::string& why);
   /// Logs a frame-size change that restarted the temporal window.
   template <typename Stream>
   void noteRestart(const Stream& stream, std::uint32_t old_width, std::uint32_t old_height);
+  void reportDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& status);
 
-  using DepthTag = std::pair<sensor_msgs::Image::ConstPtr, sensor_msgs::CameraInfo::ConstPtr>;
-
-  bool configured_ = false;
-  std::unique_ptr<TaggedStream<sensor_msgs::PointCloud2::ConstPtr>> cloud_stream_;
-  std::unique_ptr<TaggedStream<DepthTag>> depth_stream_;
-  std::mutex stream_mutex_; // one frame at a time through the stream
-  std::mutex info_mutex_;
-  sensor_msgs::CameraInfo::ConstPtr camera_info_;
-  ros::Subscriber input_, image_input_, info_input_;
-  ros::Publisher output_, image_output_, info_output_;
+  NodeSettings settings_;
+  std::string input_topic_;
+  std::unique_ptr<CloudStream> cloud_stream_;
+  std::unique_ptr<DepthStream> depth_stream_;
+  std::mutex stream_mutex_; // one frame at a time through the stream; guards the statistics too
+  FrameStatistics statistics_;
+  range_nlm::Bandwidths last_bandwidths_;
+  std::mutex connection_mutex_;
+  bool subscribed_ = false;
+  std::unique_ptr<image_transport::ImageTransport> transport_;
+  ros::Subscriber input_;
+  image_transport::CameraSubscriber camera_input_;
+  ros::Publisher output_;
+  image_transport::CameraPublisher camera_output_;
+  std::unique_ptr<ParameterReconfigure> reconfigure_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::WallTimer diagnostics_timer_;
 };
 
 } // namespace range_nlm_ros

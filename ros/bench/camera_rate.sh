@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The camera-rate benchmark of the ROS nodelet: a real master, a nodelet manager with
+# range_nlm/TemporalFilterNodelet loaded, and a VGA bag (the frames of data/kinect-sequence,
+# looped) replayed at 30 Hz, each message stamped when it is sent. Prints, per mode (static
+# default, causal radius 1, recursive radius 1, static with queue_size 1): output rate, latency
+# from stamp to receipt (median, 95th percentile), frames dropped and how old the previous
+# output's frame is.
+#
+#   ros/bench/camera_rate.sh [BUILD_DIR [SECONDS [RATE_HZ]]]      (defaults: build 10 30)
+#
+# It is a benchmark, not a test: run it on a quiet machine; docs/ros.md has its figures.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+build=$(cd "${1:-$root/build}" && pwd)
+seconds=${2:-10}
+rate=${3:-30}
+devel=$build/ros/devel
+player=$devel/lib/range_nlm/range_nlm_ros_camera_rate
+nodelet=/usr/lib/nodelet/nodelet
+[[ -x $player ]] || { echo "camera_rate.sh: $player is missing (build the target range_nlm_ros_camera_rate)" >&2; exit 2; }
+[[ -x $nodelet ]] || nodelet=$(command -v nodelet) || { echo "camera_rate.sh: no nodelet executable (libnodeletlib-tools)" >&2; exit 2; }
+
+work=$(mktemp -d /tmp/range_nlm_camera_rate.XXXXXX)
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
+  for _ in $(seq 50); do
+    local alive=0
+    for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+    ((alive)) || break
+    sleep 0.1
+  done
+  for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI=http://127.0.0.1:$port ROS_IP=127.0.0.1 ROS_HOSTNAME=127.0.0.1
+export ROS_HOME=$work ROS_LOG_DIR=$work/log AMENT_PREFIX_PATH=$devel
+unset ROS_NAMESPACE
+rosmaster --core -p "$port" >"$work/master.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 100); do
+  /usr/bin/python3 -c "import socket; socket.create_connection(('127.0.0.1', $port), 0.2)" 2>/dev/null && break
+  sleep 0.1
+done
+
+"$player" make-bag "$work/vga.bag" /camera/depth/points "$root"/data/kinect-sequence/*.pcd >/dev/null
+"$nodelet" manager __name:=camera_rate_manager >"$work/manager.log" 2>&1 &
+pids+=($!)
+
+echo "range_nlm nodelet at $rate Hz, VGA PointCloud2 (x y z rgba), $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+run_mode() {
+  local name=$1
+  shift
+  "$nodelet" load range_nlm/TemporalFilterNodelet camera_rate_manager "__name:=$name" "$@" >"$work/$name.log" 2>&1 &
+  local loader=$!
+  pids+=("$loader")
+  printf '%-28s ' "$name ($*):"
+  "$player" play "$work/vga.bag" "/$name/input" "/$name/output" "$seconds" "$rate" ||
+    { echo "failed; manager log:"; tail -20 "$work/manager.log"; }
+  kill -INT "$loader" 2>/dev/null || true
+  wait "$loader" 2>/dev/null || true
+}
+run_mode static _temporal_radius:=0
+run_mode causal _temporal_radius:=1 _causal:=true
+run_mode recursive _temporal_radius:=1 _recursive:=true
+# The same static default with a queue of one frame: the newest frame only, the lowest latency.
+run_mode static_queue1 _temporal_radius:=0 _queue_size:=1
