@@ -162,6 +162,9 @@ variants()
   p = FilterParameters::recommended();
   p.iterations = 3;
   v.emplace_back("default, 3 passes", p);
+  p = FilterParameters::recommended();
+  p.scales = 2;
+  v.emplace_back("default, 2 scales", p);
   return v;
 }
 
