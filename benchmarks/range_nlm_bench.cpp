@@ -534,6 +534,8 @@ stageLabel(Stage stage, const FilterParameters& p, std::size_t frames)
                            : "dilation " + std::to_string(p.dilation) + " (split into phases, merge)";
   case Stage::neighbour_frames:
     return "neighbour frames (" + std::to_string(frames - 1) + ")";
+  case Stage::pyramid:
+    return "pyramid (" + std::to_string(p.scales) + " scales: reduce, carry corrections up)";
   case Stage::bandwidths:
     return std::string("bandwidths (") +
            (p.bandwidth_model == BandwidthModel::range_adaptive ? "noise profile" : "global") + ", " +
@@ -554,7 +556,8 @@ stageLabel(Stage stage, const FilterParameters& p, std::size_t frames)
 bool
 oncePerCall(Stage stage)
 {
-  return stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation;
+  return stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation ||
+         stage == Stage::pyramid;
 }
 
 /// The breakdown's steps: the conversion, the phases runFilter went through (`stages`, in the
