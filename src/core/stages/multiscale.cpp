@@ -2,6 +2,7 @@
 // scales are filtered first, where spatially correlated noise is close to white and a pass costs a
 // quarter of the scale above; each scale's range corrections are carried up along the rays, then
 // the finer scale is filtered. docs/method.md, "Multiscale filtering".
+#include "multiscale.h"
 #include "stages.h"
 
 #include "../internal.h"
@@ -18,20 +19,6 @@ namespace detail
 {
 namespace
 {
-
-/// What the reduction and the carry agree on: the viewpoint and the tolerance of "one surface"
-/// at a range (noise sigmas of the scale's profile, at least some pixel footprints).
-struct SurfaceTolerance
-{
-  const NoiseProfile& profile;
-  float ray_angle;
-
-  float at(float rho) const
-  {
-    return std::max(tuned::kScaleSurfaceSigmas * profile.sigmaAt(rho),
-                    tuned::kScaleSurfaceFootprints * ray_angle * rho);
-  }
-};
 
 /// The range of a point from the viewpoint.
 float
@@ -92,6 +79,8 @@ reduceBlock(const Grid& fine, const std::vector<float>& rho, const SurfaceTolera
   coarse.valid[c] = 1;
 }
 
+} // namespace
+
 /// `fine` reduced to half its width and height (rounded up), block by block (reduceBlock).
 void
 reduceFrame(const Grid& fine, const Viewpoint& viewpoint, const SurfaceTolerance& tolerance, int threads,
@@ -114,6 +103,9 @@ reduceFrame(const Grid& fine, const Viewpoint& viewpoint, const SurfaceTolerance
       reduceBlock(fine, rho, tolerance, a, b, coarse, member);
 }
 
+namespace
+{
+
 /// The coarse scale's range corrections (filtered range - reduced range; NaN where either is
 /// invalid) and the reduced ranges.
 void
@@ -131,16 +123,6 @@ coarseCorrections(const Grid& reduced, const Grid& filtered, const Viewpoint& vi
     correction[c] = valid ? rangeOf(filtered, c, viewpoint) - reduced_rho[c] : std::nanf("");
   }
 }
-
-/// What the carry of one scale's corrections reads.
-struct CarrySource
-{
-  int width, height; // of the coarse scale
-  const std::vector<float>& rho;        // reduced ranges
-  const std::vector<float>& correction; // per coarse pixel, NaN = none
-  const std::vector<unsigned char>& member;
-  const SurfaceTolerance& tolerance;
-};
 
 /// The bilinear weights at fine pixel (u, v) with range r of the four nearest coarse pixels that
 /// hold a correction and whose reduced point lies on one surface with the fine point (within the
@@ -176,6 +158,8 @@ carryWeights(const CarrySource& s, int u, int v, float r, bool member, std::arra
   return taken;
 }
 
+} // namespace
+
 /// `fine` with every active valid point moved along its ray by the carried correction (the
 /// weighted mean of the corrections carryWeights takes; none taken: the point stays).
 void
@@ -207,6 +191,9 @@ carryCorrections(const Grid& fine, const std::vector<float>& fine_rho, const Car
       out.z[i] = viewpoint[2] + (fine.z[i] - viewpoint[2]) * scale;
     }
 }
+
+namespace
+{
 
 /// A coarse pixel is active where one of its fine pixels is (empty: all are).
 void

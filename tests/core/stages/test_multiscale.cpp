@@ -2,6 +2,7 @@
 // depth steps, thread counts, the direct evaluation as reference, and what it is for (noise
 // correlated over many pixels).
 #include "../frame_fixtures.h"
+#include "core/stages/multiscale.h"
 #include "core/stages/stages.h"
 
 #include <range_nlm/parameters.h>
@@ -137,19 +138,69 @@ TEST(Multiscale, HolesStayHolesInFramesOfOddSize)
   EXPECT_GT(moved, noisy.countValid() * 9 / 10);
 }
 
-TEST(Multiscale, NeverBridgesADepthStep)
+TEST(Multiscale, ReductionTakesOneSideOfADepthStep)
 {
-  // 2 x 2 blocks across the step take one side, and corrections are carried only within a side:
-  // no point ends between the planes, and both sides keep their depth.
-  const float sigma = 0.002f;
-  const Grid noisy = depthStep(96, 64, 1.0f, 1.1f, sigma);
-  const Grid out = filtered(noisy, multiscale(3));
-  for (int v = 0; v < out.height; ++v)
-    for (int u = 0; u < out.width; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * out.width + u;
-      const float plane = u < out.width / 2 ? 1.0f : 1.1f;
-      ASSERT_NEAR(out.z[i], plane, 6 * sigma) << u << ", " << v;
-    }
+  // A 2 x 2 block whose left column is at 1.0 m and right column at 1.1 m: its coarse point lies
+  // on one of the two surfaces (the lower-median range's), never between them.
+  const Grid fine = depthStep(2, 2, 1.0f, 1.1f, 0.0f);
+  const NoiseProfile profile{{1.0f}, {0.001f}, {0.01f}};
+  const detail::SurfaceTolerance tolerance{profile, 0.001f};
+  std::vector<float> rho;
+  std::vector<unsigned char> member;
+  Grid coarse;
+  detail::reduceFrame(fine, kOrigin, tolerance, 1, rho, coarse, &member);
+  ASSERT_EQ(coarse.width, 1);
+  ASSERT_EQ(coarse.height, 1);
+  ASSERT_TRUE(coarse.valid[0]);
+  EXPECT_FLOAT_EQ(coarse.z[0], 1.0f);
+  EXPECT_EQ(member, (std::vector<unsigned char>{1, 0, 1, 0}));
+}
+
+TEST(Multiscale, ReductionOfOddSizesAndHoles)
+{
+  Grid fine = depthStep(5, 3, 1.0f, 1.0f, 0.0f);
+  for (std::size_t i : {0u, 1u, 5u, 6u}) { // the whole first block
+    fine.valid[i] = 0;
+    fine.x[i] = fine.y[i] = fine.z[i] = std::nanf("");
+  }
+  const NoiseProfile profile{{1.0f}, {0.001f}, {0.01f}};
+  const detail::SurfaceTolerance tolerance{profile, 0.001f};
+  std::vector<float> rho;
+  Grid coarse;
+  detail::reduceFrame(fine, kOrigin, tolerance, 1, rho, coarse, nullptr);
+  ASSERT_EQ(coarse.width, 3);
+  ASSERT_EQ(coarse.height, 2);
+  EXPECT_FALSE(coarse.valid[0]);
+  EXPECT_TRUE(std::isnan(coarse.z[0]));
+  // The last column and row are blocks of their own: the mean of the pixels they hold.
+  EXPECT_FLOAT_EQ(coarse.x[2], fine.x[4]);
+  EXPECT_FLOAT_EQ(coarse.x[5], fine.x[14]);
+  for (std::size_t c = 1; c < coarse.size(); ++c)
+    EXPECT_TRUE(coarse.valid[c]) << c;
+}
+
+TEST(Multiscale, CarriedCorrectionsNeverCrossADepthStep)
+{
+  // Fine columns 0-1 at 1.0 m, 2-3 at 1.1 m; the coarse points of the two sides move +10 mm and
+  // -50 mm. Every fine point moves by its own side's correction alone, along its ray.
+  const Grid fine = depthStep(4, 2, 1.0f, 1.1f, 0.0f);
+  std::vector<float> fine_rho;
+  detail::rangesOf(fine, kOrigin, 1, fine_rho);
+  const NoiseProfile profile{{1.0f}, {0.001f}, {0.01f}};
+  const detail::SurfaceTolerance tolerance{profile, 0.001f};
+  const std::vector<float> coarse_rho{fine_rho[0], fine_rho[3]}, correction{0.01f, -0.05f};
+  const std::vector<unsigned char> member(8, 1);
+  const detail::CarrySource source{2, 1, coarse_rho, correction, member, tolerance};
+  Grid out;
+  detail::carryCorrections(fine, fine_rho, source, kOrigin, {}, 1, out);
+  std::vector<float> out_rho;
+  detail::rangesOf(out, kOrigin, 1, out_rho);
+  for (int i = 0; i < 8; ++i) {
+    const float expected = fine_rho[i] + (i % 4 < 2 ? 0.01f : -0.05f);
+    EXPECT_NEAR(out_rho[i], expected, 1e-6f) << i;
+    // Along its ray: the direction from the viewpoint is kept.
+    EXPECT_NEAR(out.x[i] / out_rho[i], fine.x[i] / fine_rho[i], 1e-6f) << i;
+  }
 }
 
 TEST(Multiscale, IdenticalForOneTwoAndThreeThreads)
