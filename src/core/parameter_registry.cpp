@@ -162,7 +162,7 @@ windowAndBandwidthEntries()
             "spatially correlated or strong, 1 otherwise), 1 = contiguous windows")
       .cli("dilation").ros("dilation").pass("dilation"),
     Entry("iterations", &P::iterations)
-      .range(atLeast(1, "must be at least 1"))
+      .range(between(1, 100, "must be 1 ... 100"))
       .help("filter passes; normals and automatic bandwidths are re-estimated before each")
       .cli("iterations").ros("iterations").pass("iterations"),
     Entry("threads", &P::threads).zeroMeans("all")

@@ -264,6 +264,8 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     detail::runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
+  // The phases of a dilation given explicitly must hold the windows (the message names it).
+  parameters.validateFor(frames[center]->width, frames[center]->height);
   detail::runDilatedPasses(frames, center, parameters, viewpoint, active, workspace, k, split);
 }
 
