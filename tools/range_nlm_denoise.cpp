@@ -175,6 +175,14 @@ framesFrom(const po::variables_map& vm, Job& job)
   if (job.single == directory)
     throw UsageError("give either INPUT.pcd OUTPUT.pcd or --input-dir DIR --output-dir DIR");
   const bool overwrite = vm.count("overwrite") > 0;
+  const std::pair<const char*, const char*> paths[] = {{"input", "INPUT"},
+                                                       {"output", "OUTPUT"},
+                                                       {"input-dir", "--input-dir"},
+                                                       {"output-dir", "--output-dir"},
+                                                       {"intrinsics", "--intrinsics"}};
+  for (const auto& [option, name] : paths) // refused before any frame is filtered
+    if (vm.count(option) && vm[option].as<std::string>().empty())
+      throw UsageError(std::string(name) + " is an empty path; give a file or directory name");
   std::error_code ec;
   if (job.single) {
     if (!vm.count("input") || !vm.count("output"))
@@ -183,8 +191,6 @@ framesFrom(const po::variables_map& vm, Job& job)
     job.outputs.push_back(vm["output"].as<std::string>());
     if (std::filesystem::is_directory(job.outputs.front(), ec))
       throw InputError("output '" + job.outputs.front() + "' is a directory; give a file name (or use --output-dir)");
-    if (std::filesystem::equivalent(job.inputs.front(), job.outputs.front(), ec) && !overwrite)
-      throw InputError("output '" + job.outputs.front() + "' is the input file; refusing to overwrite the input (use --overwrite)");
   } else {
     if (!vm.count("input-dir") || !vm.count("output-dir"))
       throw UsageError("directory mode needs both --input-dir and --output-dir");
@@ -198,6 +204,16 @@ framesFrom(const po::variables_map& vm, Job& job)
   if (job.resume && (job.single ? std::filesystem::equivalent(job.inputs.front(), job.outputs.front(), ec)
                                 : std::filesystem::equivalent(vm["input-dir"].as<std::string>(), job.output_dir, ec)))
     throw UsageError("--resume cannot be used when the output is the input (every frame would count as finished)");
+}
+
+/// Every file the job reads: its frames and the intrinsics file.
+std::vector<std::string>
+inputsOf(const Job& job, const po::variables_map& vm)
+{
+  std::vector<std::string> inputs = job.inputs;
+  if (vm.count("intrinsics"))
+    inputs.push_back(vm["intrinsics"].as<std::string>());
+  return inputs;
 }
 
 Job
@@ -221,6 +237,8 @@ jobFrom(const po::variables_map& vm)
   if (!job.single)
     for (std::string& output : job.outputs)
       output = replaceExtension(output, job.output.png ? ".png" : ".pcd");
+  if (!vm.count("overwrite")) // a link in the output directory may lead to any input frame
+    refuseOutputsThatAreInputs(inputsOf(job, vm), job.outputs, " (use --overwrite)");
   job.sharding = shardJobFrom(vm, {reachOf(job.passes), job.single, job.inputs.size(), job.output_dir, kWarmupPerRadius});
   return job;
 }
@@ -646,7 +664,7 @@ run(int argc, char** argv)
   const Job job = jobFrom(vm);
   const JobLocks locks(job);
   if (job.sharding.sharded && !job.quiet && !job.json)
-    std::cout << describeShard(job.sharding, job.inputs) << std::endl;
+    std::cout << printable(describeShard(job.sharding, job.inputs)) << std::endl;
   const Summary summary = FrameRun(job, vm).run();
   return report(summary, job);
 }

@@ -36,7 +36,7 @@ removeTemporaries(const std::vector<std::string>& outputs)
   namespace fs = std::filesystem;
   std::vector<std::string> prefixes;
   for (const std::string& output : outputs)
-    prefixes.push_back("." + fileName(output) + ".tmp");
+    prefixes.push_back(io::temporaryPrefix(fileName(output)));
   std::error_code ec;
   const fs::path dir = fs::path(outputs.front()).parent_path();
   for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec)) {

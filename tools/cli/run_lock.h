@@ -14,7 +14,7 @@ namespace tools
 {
 
 /// For --resume: removes the temporary files an interrupted run left beside `outputs`
-/// (".NAME.tmpPID", see saveCloudAtomic). The caller holds the output directory exclusively
+/// (".NAME.tmpPID", see io::temporaryPrefix). The caller holds the output directory exclusively
 /// (OutputDirectoryLock), or with --shard those outputs (FrameRangeLock), so no running
 /// range_nlm_denoise can own one of them.
 void
