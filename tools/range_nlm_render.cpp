@@ -37,15 +37,15 @@ struct Frame
   Viewpoint viewpoint = {0.0f, 0.0f, 0.0f};
 };
 
-/// Bytes rendering a width x height frame of `point_step`-byte points needs, at most (a
-/// curvature-coloured PCD): the loaded points, a PointXYZ cloud (16 bytes a pixel), the grid (13),
-/// the curvature and its scale (12), the coloured cloud and its blob (2 x 32) and the image (3).
-/// Measured with /usr/bin/time -v (docs/usage.md): within 10 % of this on 640 x 480 to 2560 x 1920
-/// frames. A comparison holds two frames.
+/// Bytes rendering a width x height frame of `point_step`-byte points needs: point_step + 68 a
+/// pixel, twice that for a comparison (two frames). Peak resident memory (/usr/bin/time -v) grows
+/// from 1280 x 960 to 2560 x 1920 frames of 12-byte points by 78 bytes a pixel for a
+/// curvature-coloured PCD (the largest single-frame output), 57 for a shaded PNG and 89 for a
+/// shaded comparison.
 std::uint64_t
 renderMemory(bool comparison, std::uint64_t width, std::uint64_t height, std::uint64_t point_step)
 {
-  const std::uint64_t per_pixel = (comparison ? 2 : 1) * (point_step + 16 + 13 + 12 + 64 + 3);
+  const std::uint64_t per_pixel = (comparison ? 2 : 1) * (point_step + 68);
   const std::uint64_t pixels = width * height;
   return pixels > UINT64_MAX / per_pixel ? UINT64_MAX : pixels * per_pixel;
 }
