@@ -47,7 +47,8 @@ const char* const kUsage =
     "sequence) stops the run after every frame before it is written, or with --keep-going is\n"
     "skipped and listed at the end.\n"
     "Exit status: 0 done, 1 error (a frame could not be read or written), 2 usage error,\n"
-    "3 done with --keep-going but some frames were skipped.\n"
+    "3 done with --keep-going but some frames were skipped, 4 another run holds the output\n"
+    "directory or these frames (nothing written; try again when it has ended).\n"
     "--shard K/N writes only the K-th of N contiguous parts of the frames (K from 0), reading the\n"
     "frames around it that its temporal windows need, so that the N parts together are the output\n"
     "of one run, byte for byte; N runs may write into one output directory at once (docs/cluster.md).\n"
@@ -432,8 +433,10 @@ public:
         throw;
       frame.unreadable = e.what(); // listed at the end
     }
-    if (loaded) // before anything of this frame or a later one is reported
+    if (loaded) { // before anything of this frame or a later one is reported
+      ++summary_.frames_read;
       results_.frameRead(job_.inputs[f]);
+    }
     return xyz;
   }
 
@@ -518,6 +521,7 @@ public:
     FrameReader reader(job_, read_order, summary_, results_);
     try {
       filterAll(chain, reader);
+      summary_.frames_filtered = chain.framesFiltered();
       results_.drain();
     } catch (...) {
       // Every frame before the failure is written first. A failure to write one of them came
@@ -595,6 +599,7 @@ private:
     for (const ChainOutput& result : results) {
       auto frame = std::make_shared<PendingFrame>(std::move(pending_.front()));
       pending_.pop_front();
+      summary_.filtered_ms += result.info.milliseconds; // of every pass, halo frames too
       if (frame->halo)
         continue; // another shard's frame
       if (!frame->unreadable.empty())

@@ -78,6 +78,9 @@ statusOf(const std::string& tool, const std::function<int()>& body)
   } catch (const po::error& e) {
     std::cerr << tool << ": usage error: " << printable(e.what()) << " (see " << tool << " --help)\n";
     return 2;
+  } catch (const LockConflict& e) {
+    std::cerr << tool << ": error: " << printable(e.what()) << "\n";
+    return 4;
   } catch (const std::bad_alloc&) {
     std::cerr << tool << ": error: out of memory (lower --memory-limit to refuse large frames up front, or free "
                          "memory)\n";

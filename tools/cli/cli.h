@@ -43,9 +43,15 @@ struct UsageError : std::runtime_error
 };
 /// Unreadable or invalid input, failed processing: exit status 1.
 using io::InputError;
+/// Another run holds the output directory or the frames (run_lock.h): exit status 4. Nothing was
+/// written; the same command succeeds once the other run has ended.
+struct LockConflict : InputError
+{
+  using InputError::InputError;
+};
 
 /// Runs `body` and maps exceptions to one-line messages on stderr and exit statuses
-/// (0 success, 1 input/processing error, 2 usage error). Standard output that could not all be
+/// (0 success, 1 input/processing error, 2 usage error, 4 LockConflict). Standard output that could not all be
 /// written (a full disk, a closed descriptor) turns a success into status 1 with a message.
 int
 runTool(const std::string& tool, const std::function<int()>& body);

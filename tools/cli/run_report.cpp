@@ -84,6 +84,9 @@ printSummaryJson(const Summary& s, const ShardJob& sharding, std::size_t sequenc
   out["width"] = s.width;
   out["height"] = s.height;
   out["filter_ms_total"] = total;
+  out["frames_read"] = s.frames_read;
+  out["frames_filtered"] = s.frames_filtered;
+  out["filter_ms_all"] = s.filtered_ms;
   out["wall_ms"] = s.wall_ms;
   out["outputs"] = outputs;
   if (sharding.sharded)
