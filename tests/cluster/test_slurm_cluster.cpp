@@ -382,6 +382,25 @@ TEST_F(SlurmClusterTest, JobArrayOfShardsWritesWhatOneMachineWrites)
     EXPECT_TRUE(test::readBytes((out / name).string()) == test::readBytes((single / name).string()))
         << name << " differs from the single-machine run";
 
+  // The array script submitted by hand without RANGE_NLM_DENOISE, the tool not on PATH: it takes
+  // the tool of the checkout it was submitted from (build/tools/), or says that there is none.
+  const test::CommandResult by_sbatch = test::runCommand(
+      "env -u RANGE_NLM_DENOISE PATH=/usr/bin:/bin sbatch --parsable --array=2 --cpus-per-task=1 --output=" +
+      (logs / "hand-%A_%a.txt").string() + " --export=ALL,RANGE_NLM_SHARDS=4 " +
+      (kScripts / "range_nlm_array.sbatch").string() + " " + in.string() + " " + out.string() + " " + options);
+  ASSERT_EQ(by_sbatch.status, 0) << by_sbatch.output;
+  ASSERT_TRUE(waitForJobs(60)) << test::runCommand("squeue").output << cluster->logs();
+  const std::string hand_log = test::readBytes(
+      (logs / ("hand-" + by_sbatch.output.substr(0, by_sbatch.output.find_first_of(";\n")) + "_2.txt")).string());
+  std::error_code ec;
+  if (fs::equivalent(kTool, fs::path(RANGE_NLM_SOURCE_DIR) / "build" / "tools" / "range_nlm_denoise", ec)) {
+    EXPECT_NE(hand_log.find("exit_status=0"), std::string::npos) << hand_log;
+    EXPECT_NE(hand_log.find("\"skipped\":7,"), std::string::npos) << hand_log; // --resume: all there
+  } else {
+    EXPECT_NE(hand_log.find("range_nlm_denoise not found at"), std::string::npos) << hand_log;
+    EXPECT_NE(hand_log.find("exit_status=2"), std::string::npos) << hand_log;
+  }
+
   // The check script also runs by hand, outside Slurm and without the array job ids; a leftover
   // temporary file is reported.
   const std::string check_by_hand = "bash " + (kScripts / "range_nlm_check.sbatch").string() + " " + in.string() +
