@@ -44,9 +44,14 @@ namespace
 void
 reserveStandardDescriptors()
 {
-  for (int fd = 0; fd <= 2; ++fd)
-    if (::fcntl(fd, F_GETFD) < 0 && errno == EBADF && ::open("/dev/null", O_RDONLY) != fd)
-      return; // descriptors below it are taken, so open() gives exactly fd; nothing else to do if not
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) >= 0 || errno != EBADF)
+      continue;
+    // The descriptors below fd are taken (by now), so open() returns fd itself.
+    const int reserved = ::open("/dev/null", O_RDONLY);
+    if (reserved >= 0 && reserved != fd)
+      ::close(reserved);
+  }
 }
 
 /// OMP_NUM_THREADS above the thread limit of the tools (FilterParameters::max_threads, as for
