@@ -47,7 +47,8 @@ const char* const kUsage =
     "sequence) stops the run after every frame before it is written, or with --keep-going is\n"
     "skipped and listed at the end.\n"
     "Exit status: 0 done, 1 error (a frame could not be read or written), 2 usage error,\n"
-    "3 done with --keep-going but some frames were skipped.\n"
+    "3 done with --keep-going but some frames were skipped, 4 another run holds the output\n"
+    "directory or these frames (nothing written; try again when it has ended).\n"
     "--shard K/N writes only the K-th of N contiguous parts of the frames (K from 0), reading the\n"
     "frames around it that its temporal windows need, so that the N parts together are the output\n"
     "of one run, byte for byte; N runs may write into one output directory at once (docs/cluster.md).\n"
@@ -175,6 +176,14 @@ framesFrom(const po::variables_map& vm, Job& job)
   if (job.single == directory)
     throw UsageError("give either INPUT.pcd OUTPUT.pcd or --input-dir DIR --output-dir DIR");
   const bool overwrite = vm.count("overwrite") > 0;
+  const std::pair<const char*, const char*> paths[] = {{"input", "INPUT"},
+                                                       {"output", "OUTPUT"},
+                                                       {"input-dir", "--input-dir"},
+                                                       {"output-dir", "--output-dir"},
+                                                       {"intrinsics", "--intrinsics"}};
+  for (const auto& [option, name] : paths) // refused before any frame is filtered
+    if (vm.count(option) && vm[option].as<std::string>().empty())
+      throw UsageError(std::string(name) + " is an empty path; give a file or directory name");
   std::error_code ec;
   if (job.single) {
     if (!vm.count("input") || !vm.count("output"))
@@ -183,8 +192,6 @@ framesFrom(const po::variables_map& vm, Job& job)
     job.outputs.push_back(vm["output"].as<std::string>());
     if (std::filesystem::is_directory(job.outputs.front(), ec))
       throw InputError("output '" + job.outputs.front() + "' is a directory; give a file name (or use --output-dir)");
-    if (std::filesystem::equivalent(job.inputs.front(), job.outputs.front(), ec) && !overwrite)
-      throw InputError("output '" + job.outputs.front() + "' is the input file; refusing to overwrite the input (use --overwrite)");
   } else {
     if (!vm.count("input-dir") || !vm.count("output-dir"))
       throw UsageError("directory mode needs both --input-dir and --output-dir");
@@ -198,6 +205,16 @@ framesFrom(const po::variables_map& vm, Job& job)
   if (job.resume && (job.single ? std::filesystem::equivalent(job.inputs.front(), job.outputs.front(), ec)
                                 : std::filesystem::equivalent(vm["input-dir"].as<std::string>(), job.output_dir, ec)))
     throw UsageError("--resume cannot be used when the output is the input (every frame would count as finished)");
+}
+
+/// Every file the job reads: its frames and the intrinsics file.
+std::vector<std::string>
+inputsOf(const Job& job, const po::variables_map& vm)
+{
+  std::vector<std::string> inputs = job.inputs;
+  if (vm.count("intrinsics"))
+    inputs.push_back(vm["intrinsics"].as<std::string>());
+  return inputs;
 }
 
 Job
@@ -221,6 +238,8 @@ jobFrom(const po::variables_map& vm)
   if (!job.single)
     for (std::string& output : job.outputs)
       output = replaceExtension(output, job.output.png ? ".png" : ".pcd");
+  if (!vm.count("overwrite")) // a link in the output directory may lead to any input frame
+    refuseOutputsThatAreInputs(inputsOf(job, vm), job.outputs, " (use --overwrite)");
   job.sharding = shardJobFrom(vm, {reachOf(job.passes), job.single, job.inputs.size(), job.output_dir, kWarmupPerRadius});
   return job;
 }
@@ -414,8 +433,10 @@ public:
         throw;
       frame.unreadable = e.what(); // listed at the end
     }
-    if (loaded) // before anything of this frame or a later one is reported
+    if (loaded) { // before anything of this frame or a later one is reported
+      ++summary_.frames_read;
       results_.frameRead(job_.inputs[f]);
+    }
     return xyz;
   }
 
@@ -500,6 +521,7 @@ public:
     FrameReader reader(job_, read_order, summary_, results_);
     try {
       filterAll(chain, reader);
+      summary_.frames_filtered = chain.framesFiltered();
       results_.drain();
     } catch (...) {
       // Every frame before the failure is written first. A failure to write one of them came
@@ -577,6 +599,7 @@ private:
     for (const ChainOutput& result : results) {
       auto frame = std::make_shared<PendingFrame>(std::move(pending_.front()));
       pending_.pop_front();
+      summary_.filtered_ms += result.info.milliseconds; // of every pass, halo frames too
       if (frame->halo)
         continue; // another shard's frame
       if (!frame->unreadable.empty())
@@ -646,7 +669,7 @@ run(int argc, char** argv)
   const Job job = jobFrom(vm);
   const JobLocks locks(job);
   if (job.sharding.sharded && !job.quiet && !job.json)
-    std::cout << describeShard(job.sharding, job.inputs) << std::endl;
+    std::cout << printable(describeShard(job.sharding, job.inputs)) << std::endl;
   const Summary summary = FrameRun(job, vm).run();
   return report(summary, job);
 }

@@ -72,11 +72,37 @@ findField(const pcl::PCLPointCloud2& blob, const char* name)
   return nullptr;
 }
 
+/// Bytes scoring a width x height frame of `point_step`-byte points needs, for the largest of the
+/// modes: ground truth, result and noisy input each loaded and as x, y, z (point_step + 16 bytes a
+/// pixel each), the truth with normals (48) and the evaluator's normals, masks and sums (120).
+/// Peak resident memory (/usr/bin/time -v) grows from 1280 x 960 to 2560 x 1920 frames by 213
+/// bytes a pixel for a result scored with its noisy input (truth of 24-byte points, frames of 12;
+/// estimated 252 to 288), 49 for --raw.
+std::uint64_t
+evalMemory(std::uint64_t width, std::uint64_t height, std::uint64_t point_step)
+{
+  const std::uint64_t per_pixel = 3 * (point_step + 16) + 48 + 120;
+  const std::uint64_t pixels = width * height;
+  return pixels > UINT64_MAX / per_pixel ? UINT64_MAX : pixels * per_pixel;
+}
+
+/// loadFrame, with running out of memory named by the file.
+LoadedCloud
+loadChecked(const std::string& path, const DepthIntrinsics* intrinsics, const io::MemoryBudget& budget)
+{
+  try {
+    return intrinsics ? loadFrame(path, *intrinsics, budget) : loadCloud(path, true, budget);
+  } catch (const std::bad_alloc&) {
+    throw InputError("'" + path + "': out of memory while reading the frame (lower --memory-limit to refuse such "
+                     "frames up front, or free memory)");
+  }
+}
+
 /// Ground truth: x, y, z and normal_x, normal_y, normal_z (float or double) of a PCD file.
 pcl::PointCloud<pcl::PointNormal>
-loadTruth(const std::string& path)
+loadTruth(const std::string& path, const io::MemoryBudget& budget)
 {
-  const LoadedCloud loaded = loadCloud(path);
+  const LoadedCloud loaded = loadChecked(path, nullptr, budget);
   const pcl::PointCloud<pcl::PointXYZ> xyz = xyzFromBlob(loaded, path);
   const pcl::PCLPointField* fields[3];
   const char* names[3] = {"normal_x", "normal_y", "normal_z"};
@@ -109,9 +135,10 @@ loadTruth(const std::string& path)
 }
 
 pcl::PointCloud<pcl::PointXYZ>
-loadXyz(const std::string& path, const pcl::PointCloud<pcl::PointNormal>& truth, const std::string& truth_path)
+loadXyz(const std::string& path, const pcl::PointCloud<pcl::PointNormal>& truth, const std::string& truth_path,
+        const io::MemoryBudget& budget)
 {
-  const LoadedCloud loaded = loadCloud(path);
+  const LoadedCloud loaded = loadChecked(path, nullptr, budget);
   if (loaded.blob.width != truth.width || loaded.blob.height != truth.height)
     throw InputError("'" + path + "': cloud is " + std::to_string(loaded.blob.width) + " x " +
                      std::to_string(loaded.blob.height) + " but the ground truth '" + truth_path + "' is " +
@@ -155,9 +182,10 @@ secondaryLine(const char* what, double value, std::size_t pixels, const char* pi
 
 /// One real frame (PCD or depth PNG) as x, y, z.
 pcl::PointCloud<pcl::PointXYZ>
-loadRealFrame(const std::string& path, const DepthIntrinsics& intrinsics, DefaultIntrinsicsWarning& warning)
+loadRealFrame(const std::string& path, const DepthIntrinsics& intrinsics, const io::MemoryBudget& budget,
+              DefaultIntrinsicsWarning& warning)
 {
-  const LoadedCloud loaded = loadFrame(path, intrinsics);
+  const LoadedCloud loaded = loadChecked(path, &intrinsics, budget);
   warning.frameRead(path);
   return xyzFromBlob(loaded, path);
 }
@@ -189,8 +217,9 @@ runPlanar(const po::variables_map& vm, const std::vector<std::string>& results, 
   }
   const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
   DefaultIntrinsicsWarning warning("range_nlm_eval", vm);
+  const io::MemoryBudget budget = memoryBudgetFrom(vm, evalMemory);
   const std::string raw_path = vm["raw"].as<std::string>();
-  const pcl::PointCloud<pcl::PointXYZ> raw = loadRealFrame(raw_path, intrinsics, warning);
+  const pcl::PointCloud<pcl::PointXYZ> raw = loadRealFrame(raw_path, intrinsics, budget, warning);
   PlanarRegions regions;
   try {
     regions = findPlanarRegions(raw, options);
@@ -200,7 +229,7 @@ runPlanar(const po::variables_map& vm, const std::vector<std::string>& results, 
   std::vector<std::string> names{raw_path};
   std::vector<PlanarResidual> residuals{planarResidual(regions, raw)};
   for (const std::string& path : results) {
-    const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics, warning);
+    const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics, budget, warning);
     try {
       residuals.push_back(planarResidual(regions, frame));
     } catch (const std::invalid_argument& e) {
@@ -219,14 +248,14 @@ runPlanar(const po::variables_map& vm, const std::vector<std::string>& results, 
     return 0;
   }
   std::cout << regions.planes.size() << " planar region" << (regions.planes.size() == 1 ? "" : "s") << " in '"
-            << raw_path << "' (at least " << options.min_region_pixels << " px; border band "
+            << printable(raw_path) << "' (at least " << options.min_region_pixels << " px; border band "
             << options.border_band << " px)\n";
   std::cout << std::left << std::setw(40) << "frame" << std::right << std::setw(13) << "interior mm" << std::setw(11)
             << "border mm" << std::setw(13) << "interior px" << std::setw(11) << "border px" << std::setw(8) << "lost"
             << "\n";
   for (std::size_t k = 0; k < residuals.size(); ++k) {
     const PlanarResidual& r = residuals[k];
-    std::cout << std::left << std::setw(40) << (k == 0 ? "raw: " + fileName(names[k]) : fileName(names[k]))
+    std::cout << std::left << std::setw(40) << printable(k == 0 ? "raw: " + fileName(names[k]) : fileName(names[k]))
               << std::right << std::setw(13) << millimetres(r.interior_rms) << std::setw(11)
               << millimetres(r.border_rms) << std::setw(13) << r.interior_pixels << std::setw(11) << r.border_pixels
               << std::setw(8) << r.points_lost << "\n";
@@ -243,11 +272,12 @@ runJitter(const po::variables_map& vm, const std::vector<std::string>& sequences
     throw UsageError("--jitter expects at least one directory of frames");
   const DepthIntrinsics intrinsics = depthIntrinsicsFrom(vm);
   DefaultIntrinsicsWarning warning("range_nlm_eval", vm);
+  const io::MemoryBudget budget = memoryBudgetFrom(vm, evalMemory);
   std::vector<TemporalJitter> jitters;
   for (const std::string& directory : sequences) {
     JitterEvaluator evaluator;
     for (const std::string& path : listInputFrames(directory)) {
-      const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics, warning);
+      const pcl::PointCloud<pcl::PointXYZ> frame = loadRealFrame(path, intrinsics, budget, warning);
       try {
         evaluator.add(frame);
       } catch (const std::invalid_argument& e) {
@@ -267,7 +297,7 @@ runJitter(const po::variables_map& vm, const std::vector<std::string>& sequences
   std::cout << std::left << std::setw(40) << "sequence" << std::right << std::setw(8) << "frames" << std::setw(10)
             << "pixels" << std::setw(10) << "mean mm" << std::setw(12) << "median mm" << "\n";
   for (std::size_t k = 0; k < jitters.size(); ++k)
-    std::cout << std::left << std::setw(40) << sequences[k] << std::right << std::setw(8) << jitters[k].frames
+    std::cout << std::left << std::setw(40) << printable(sequences[k]) << std::right << std::setw(8) << jitters[k].frames
               << std::setw(10) << jitters[k].pixels << std::setw(10) << millimetres(jitters[k].mean) << std::setw(12)
               << millimetres(jitters[k].median) << "\n";
   std::cout << std::flush;
@@ -297,6 +327,7 @@ addOptions(po::options_description& options, const PlanarRegionOptions& planar)
      "directory given as an argument");
   // clang-format on
   addDepthImageOptions(options);
+  addMemoryLimitOption(options);
 }
 
 /// The frames of a ground-truth run: GT, RESULT and (optionally) NOISY, frame k of each the same.
@@ -305,6 +336,7 @@ struct GroundTruthJob
   std::vector<std::string> gt_frames, result_frames, input_frames;
   bool has_input = false;
   bool json = false;
+  io::MemoryBudget budget;
 };
 
 /// GT and RESULT as the two positional arguments or as options, --input; all files or all
@@ -330,6 +362,7 @@ groundTruthJobFrom(const po::variables_map& vm, const std::vector<std::string>& 
   GroundTruthJob job;
   job.has_input = !input_path.empty();
   job.json = vm.count("json") > 0;
+  job.budget = memoryBudgetFrom(vm, evalMemory);
 
   std::error_code ec;
   auto checkExists = [&](const std::string& path) {
@@ -382,7 +415,7 @@ score(const GroundTruthJob& job)
   unsigned& width = scores.width;
   unsigned& height = scores.height;
   for (std::size_t k = 0; k < job.gt_frames.size(); ++k) {
-    const pcl::PointCloud<pcl::PointNormal> truth = loadTruth(job.gt_frames[k]);
+    const pcl::PointCloud<pcl::PointNormal> truth = loadTruth(job.gt_frames[k], job.budget);
     if (k == 0) {
       width = truth.width;
       height = truth.height;
@@ -391,10 +424,10 @@ score(const GroundTruthJob& job)
                        std::to_string(truth.height) + " but the sequence is " + std::to_string(width) + " x " +
                        std::to_string(height));
     }
-    const pcl::PointCloud<pcl::PointXYZ> result = loadXyz(job.result_frames[k], truth, job.gt_frames[k]);
+    const pcl::PointCloud<pcl::PointXYZ> result = loadXyz(job.result_frames[k], truth, job.gt_frames[k], job.budget);
     pcl::PointCloud<pcl::PointXYZ> input;
     if (job.has_input)
-      input = loadXyz(job.input_frames[k], truth, job.gt_frames[k]);
+      input = loadXyz(job.input_frames[k], truth, job.gt_frames[k], job.budget);
     try {
       result_evaluator.add(truth, result, job.has_input ? &input : nullptr);
       if (job.has_input)
@@ -430,7 +463,7 @@ printScoresTable(const GroundTruthScores& scores)
   std::cout << metricsTableHeader() << "\n";
   const bool sequence = metrics.frames.size() > 1;
   for (std::size_t k = 0; k < metrics.frames.size(); ++k)
-    std::cout << metricsTableRow(scores.names[k], metrics.frames[k]) << "\n";
+    std::cout << metricsTableRow(printable(scores.names[k]), metrics.frames[k]) << "\n";
   if (sequence)
     std::cout << metricsTableRow("all " + std::to_string(metrics.frames.size()) + " frames", metrics.total) << "\n";
   if (input_metrics)

@@ -1,9 +1,12 @@
 // range_nlm_render: images of organized range frames (flat shading or mean-curvature colour),
 // before/after comparisons on one colour scale, and curvature-coloured clouds for pcl_viewer.
 #include "cli/cli.h"
+#include "cli/pipeline.h"
+#include "cli/run_lock.h"
 
 #include <range_nlm/eval/render.h>
 
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 
@@ -34,16 +37,53 @@ struct Frame
   Viewpoint viewpoint = {0.0f, 0.0f, 0.0f};
 };
 
+/// Bytes rendering a width x height frame of `point_step`-byte points needs: point_step + 68 a
+/// pixel, twice that for a comparison (two frames). Peak resident memory (/usr/bin/time -v) grows
+/// from 1280 x 960 to 2560 x 1920 frames of 12-byte points by 78 bytes a pixel for a
+/// curvature-coloured PCD (the largest single-frame output), 57 for a shaded PNG and 89 for a
+/// shaded comparison.
+std::uint64_t
+renderMemory(bool comparison, std::uint64_t width, std::uint64_t height, std::uint64_t point_step)
+{
+  const std::uint64_t per_pixel = (comparison ? 2 : 1) * (point_step + 68);
+  const std::uint64_t pixels = width * height;
+  return pixels > UINT64_MAX / per_pixel ? UINT64_MAX : pixels * per_pixel;
+}
+
+/// The frame at `path`, refused from its header if it would not fit `budget`.
 Frame
-loadInput(const std::string& path, const DepthIntrinsics& intrinsics, DefaultIntrinsicsWarning& warning)
+loadInput(const std::string& path, const DepthIntrinsics& intrinsics, const io::MemoryBudget& budget,
+          DefaultIntrinsicsWarning& warning)
 {
   Frame frame;
   frame.path = path;
-  const LoadedCloud loaded = loadFrame(path, intrinsics);
-  warning.frameRead(path);
-  frame.cloud = xyzFromBlob(loaded, path);
-  frame.viewpoint = {loaded.origin[0], loaded.origin[1], loaded.origin[2]};
+  try {
+    const LoadedCloud loaded = loadFrame(path, intrinsics, budget);
+    warning.frameRead(path);
+    frame.cloud = xyzFromBlob(loaded, path);
+    frame.viewpoint = {loaded.origin[0], loaded.origin[1], loaded.origin[2]};
+  } catch (const std::bad_alloc&) {
+    throw InputError("'" + path + "': out of memory while reading the frame (lower --memory-limit to refuse such "
+                     "frames up front, or free memory)");
+  }
   return frame;
+}
+
+/// Every file the run reads: `frames` and the intrinsics file.
+std::vector<std::string>
+inputsOf(std::vector<std::string> frames, const po::variables_map& vm)
+{
+  if (vm.count("intrinsics"))
+    frames.push_back(vm["intrinsics"].as<std::string>());
+  return frames;
+}
+
+/// The directory an output file goes into ("" for the current one), whose lock a render shares
+/// with single-frame denoise runs: a directory run of range_nlm_denoise holds it alone.
+std::string
+parentDirectory(const std::string& path)
+{
+  return std::filesystem::path(path).parent_path().string();
 }
 
 std::string
@@ -80,6 +120,7 @@ renderParametersFrom(const po::variables_map& vm)
   p.threads = vm["threads"].as<int>();
   try {
     p.validate();
+    useThreads(p.threads);
   } catch (const std::invalid_argument& e) {
     // The parameter names of RenderParameters are the option names with '_' for '-'.
     std::string message = e.what();
@@ -132,6 +173,7 @@ run(int argc, char** argv)
     ("quiet,q", "print nothing but errors");
   // clang-format on
   addDepthImageOptions(options);
+  addMemoryLimitOption(options);
   po::positional_options_description positional;
   positional.add("paths", -1);
   po::variables_map vm;
@@ -147,8 +189,13 @@ run(int argc, char** argv)
     throw UsageError("--scale-from must be 'before' or 'both', got '" + scale_from + "'");
   const std::vector<std::string> paths =
       vm.count("paths") ? vm["paths"].as<std::vector<std::string>>() : std::vector<std::string>();
+  for (const std::string& path : paths)
+    if (path.empty())
+      throw UsageError("an empty path was given; give a file name");
   const bool comparison = vm.count("before") || vm.count("after");
   const bool quiet = vm.count("quiet") > 0;
+  const io::MemoryBudget budget = memoryBudgetFrom(
+      vm, [comparison](std::uint64_t w, std::uint64_t h, std::uint64_t step) { return renderMemory(comparison, w, h, step); });
 
   if (comparison) {
     if (!vm.count("before") || !vm.count("after"))
@@ -158,8 +205,11 @@ run(int argc, char** argv)
     const std::string& output = paths[0];
     if (extensionOf(output) != ".png")
       throw UsageError("output '" + output + "' of a comparison must be a .png file");
-    const Frame before = loadInput(vm["before"].as<std::string>(), intrinsics, warning);
-    const Frame after = loadInput(vm["after"].as<std::string>(), intrinsics, warning);
+    refuseOutputsThatAreInputs(inputsOf({vm["before"].as<std::string>(), vm["after"].as<std::string>()}, vm), {output},
+                               "");
+    const OutputDirectoryLock lock(parentDirectory(output), false);
+    const Frame before = loadInput(vm["before"].as<std::string>(), intrinsics, budget, warning);
+    const Frame after = loadInput(vm["after"].as<std::string>(), intrinsics, budget, warning);
     if (before.cloud.width != after.cloud.width || before.cloud.height != after.cloud.height)
       throw InputError("'" + after.path + "' is " + std::to_string(after.cloud.width) + " x " +
                        std::to_string(after.cloud.height) + " but '" + before.path + "' is " +
@@ -171,7 +221,7 @@ run(int argc, char** argv)
                           scale_from == "both" ? ScaleSource::both : ScaleSource::before);
     saveRgbPng(output, result.image);
     if (!quiet) {
-      std::cout << output << ": " << result.image.width << " x " << result.image.height;
+      std::cout << printable(output) << ": " << result.image.width << " x " << result.image.height;
       if (mode == RenderMode::curvature)
         std::cout << ", curvature scale +-" << std::setprecision(6) << result.curvature_limit << " 1/unit"
                   << (parameters.curvature_limit > 0.0f ? " (given)"
@@ -191,7 +241,9 @@ run(int argc, char** argv)
     throw UsageError("output '" + output + "' must be a .png image or a .pcd cloud");
   if (extension == ".pcd" && mode != RenderMode::curvature)
     throw UsageError("a .pcd output is coloured by curvature; add --mode curvature");
-  const Frame frame = loadInput(paths[0], intrinsics, warning);
+  refuseOutputsThatAreInputs(inputsOf({paths[0]}, vm), {output}, "");
+  const OutputDirectoryLock lock(parentDirectory(output), false);
+  const Frame frame = loadInput(paths[0], intrinsics, budget, warning);
   parameters.viewpoint = frame.viewpoint;
   float limit = 0.0f;
   std::string size;
@@ -214,7 +266,7 @@ run(int argc, char** argv)
     size = std::to_string(image.width) + " x " + std::to_string(image.height);
   }
   if (!quiet) {
-    std::cout << output << ": " << size;
+    std::cout << printable(output) << ": " << size;
     if (mode == RenderMode::curvature)
       std::cout << ", curvature scale +-" << std::setprecision(6) << limit << " 1/unit"
                 << (parameters.curvature_limit > 0.0f ? " (given)" : " (automatic)");

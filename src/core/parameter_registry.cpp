@@ -165,10 +165,10 @@ windowAndBandwidthEntries()
       .range(between(1, 6, "must be 1 (one scale) ... 6"))
       .docs("[multiscale filtering](#multiscale-filtering)")
       .help("scales of the multiscale run: the frame halved scales - 1 times, filtered from the coarsest up, each "
-            "finer scale one pass after the coarser one's corrections; 1 = one scale")
+            "finer scale after the coarser one's corrections are carried up; 1 = one scale")
       .cli("scales").ros("scales").pass("scales"),
     Entry("iterations", &P::iterations)
-      .range(atLeast(1, "must be at least 1"))
+      .range(between(1, 100, "must be 1 ... 100"))
       .help("filter passes; normals and automatic bandwidths are re-estimated before each")
       .cli("iterations").ros("iterations").pass("iterations"),
     Entry("threads", &P::threads).zeroMeans("all")

@@ -2,6 +2,7 @@
 
 #include <range_nlm/parameter_registry.h>
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -29,6 +30,17 @@ FilterParameters::validateFor(int width, int height) const
   fits("search_window", search_window);
   fits("patch_size", patch_size);
   fits("normal_window", normal_window);
+  // A dilation k filters the frame's k^2 phases, each about width / k x height / k: the windows
+  // must fit those, and the message must name the dilation, not a window that fits the frame.
+  const int k = dilation;
+  const int window = std::max({search_window, patch_size, normal_window});
+  if (k > 1 && (window > width / k || window > height / k)) {
+    std::ostringstream msg;
+    msg << "range_nlm: parameter dilation = " << k << " splits the cloud (" << width << " x " << height
+        << ") into phases of " << width / k << " x " << height / k << " pixels, smaller than the " << window
+        << "-pixel windows; lower the dilation (0 = automatic)";
+    throw std::invalid_argument(msg.str());
+  }
 }
 
 FilterParameters

@@ -277,6 +277,8 @@ detail::runOneScale(const std::vector<const Grid*>& frames, int center, const Fi
     runContiguous(frames, center, parameters, viewpoint, active, workspace);
     return;
   }
+  // The phases of a dilation given explicitly must hold the windows (the message names it).
+  parameters.validateFor(frames[center]->width, frames[center]->height);
   runDilatedPasses(frames, center, parameters, viewpoint, active, workspace, k, split);
 }
 

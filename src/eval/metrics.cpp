@@ -217,11 +217,57 @@ number(double value, int precision = 6)
   return s.str();
 }
 
+/// Bytes of the well-formed UTF-8 sequence at text[i] (RFC 3629: no overlong forms, no
+/// surrogates, nothing above U+10FFFF), 0 if there is none.
+std::size_t
+utf8Length(const std::string& text, std::size_t i)
+{
+  const auto byte = [&](std::size_t k) { return i + k < text.size() ? static_cast<unsigned char>(text[i + k]) : 0u; };
+  const unsigned lead = byte(0);
+  if (lead < 0x80)
+    return 1;
+  std::size_t length = 0;
+  unsigned low = 0x80, high = 0xbf; // the range of the second byte
+  if (lead >= 0xc2 && lead <= 0xdf)
+    length = 2;
+  else if (lead >= 0xe0 && lead <= 0xef) {
+    length = 3;
+    low = lead == 0xe0 ? 0xa0 : 0x80;
+    high = lead == 0xed ? 0x9f : 0xbf;
+  } else if (lead >= 0xf0 && lead <= 0xf4) {
+    length = 4;
+    low = lead == 0xf0 ? 0x90 : 0x80;
+    high = lead == 0xf4 ? 0x8f : 0xbf;
+  } else {
+    return 0;
+  }
+  if (byte(1) < low || byte(1) > high)
+    return 0;
+  for (std::size_t k = 2; k < length; ++k)
+    if (byte(k) < 0x80 || byte(k) > 0xbf)
+      return 0;
+  return length;
+}
+
+/// A JSON string literal of `text`; bytes that are not UTF-8 (a file name may hold any) become
+/// U+FFFD, as the denoise tool's summary writes them, so that the output stays valid JSON.
 std::string
 jsonString(const std::string& text)
 {
   std::string out = "\"";
-  for (char c : text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t length = utf8Length(text, i);
+    if (length == 0) {
+      out += "\xef\xbf\xbd";
+      ++i;
+      continue;
+    }
+    if (length > 1) {
+      out.append(text, i, length);
+      i += length;
+      continue;
+    }
+    const char c = text[i++];
     if (c == '"' || c == '\\') {
       out += '\\';
       out += c;

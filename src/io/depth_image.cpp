@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -198,29 +199,80 @@ colorTypeName(int channels)
 void
 DepthIntrinsics::validate() const
 {
-  auto positive = [](const char* name, double value) {
-    if (!(std::isfinite(value) && value > 0.0))
-      throw std::invalid_argument(std::string("depth intrinsics: ") + name + " must be a positive number, got " +
-                                  numberText(value));
+  // The bounds keep every back-projected coordinate of a 16-bit image a finite float that is not
+  // rounded to 0: (65535 + |c|) * z / f with z up to 65535 / depth_scale, and down to 1 / depth_scale.
+  auto within = [](const char* name, double value, double low, double high, const char* what) {
+    if (!(std::isfinite(value) && value >= low && value <= high))
+      throw std::invalid_argument(std::string("depth intrinsics: ") + name + " must be " + what + " from " +
+                                  numberText(low) + " to " + numberText(high) + ", got " + numberText(value));
   };
-  positive("fx", fx);
-  positive("fy", fy);
-  if (!std::isfinite(cx))
-    throw std::invalid_argument("depth intrinsics: cx must be finite, got " + numberText(cx));
-  if (!std::isfinite(cy))
-    throw std::invalid_argument("depth intrinsics: cy must be finite, got " + numberText(cy));
-  positive("depth_scale", depth_scale);
+  within("fx", fx, kMinFocalLength, kMaxFocalLength, "a positive number of pixels");
+  within("fy", fy, kMinFocalLength, kMaxFocalLength, "a positive number of pixels");
+  within("cx", cx, -kMaxPrincipalPoint, kMaxPrincipalPoint, "finite, a number of pixels");
+  within("cy", cy, -kMaxPrincipalPoint, kMaxPrincipalPoint, "finite, a number of pixels");
+  within("depth_scale", depth_scale, kMinDepthScale, kMaxDepthScale, "a positive number of values per metre");
 }
+
+namespace
+{
+/// Largest intrinsics file read: a few lines of `key value` with comments are far below it, and
+/// a device or a pipe that never ends (/dev/zero) is refused instead of read for ever.
+constexpr std::size_t kMaxIntrinsicsBytes = 1 << 20;
+
+/// The text of an intrinsics file, at most kMaxIntrinsicsBytes.
+std::string
+intrinsicsText(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw std::invalid_argument(quoted(path) + ": cannot open intrinsics file");
+  std::string text(kMaxIntrinsicsBytes + 1, '\0');
+  in.read(&text[0], static_cast<std::streamsize>(text.size()));
+  if (in.bad())
+    throw std::invalid_argument(quoted(path) + ": read error");
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxIntrinsicsBytes)
+    throw std::invalid_argument(quoted(path) + ": not an intrinsics file: longer than " +
+                                std::to_string(kMaxIntrinsicsBytes / 1024) +
+                                " kB (an intrinsics file is a few lines of 'key value')");
+  return text;
+}
+
+bool
+isFreeTextKey(const std::string& key)
+{
+  return key == "sensor" || key == "distortion" || key == "note" || key == "notes" || key == "comment" ||
+         key == "comments" || key == "source";
+}
+
+/// The depth scale a `depth_format` line gives: N for "value / N", 1000 for millimetres, 0 if it
+/// says neither. Throws if N is not a positive finite number (a scale of 0 is no scale).
+double
+depthFormatScale(const std::string& value, const std::string& where)
+{
+  static const std::regex divided(R"(value\s*/\s*([0-9]+(\.[0-9]*)?))");
+  std::smatch match;
+  if (std::regex_search(value, match, divided)) {
+    const double scale = std::strtod(match[1].str().c_str(), nullptr);
+    if (!(std::isfinite(scale) && scale > 0.0))
+      throw std::invalid_argument(where + ": depth_format '" + value + "' divides by " + match[1].str() +
+                                  "; the depth scale must be a positive number");
+    return scale;
+  }
+  if (value.find("millimetre") != std::string::npos || value.find("millimeter") != std::string::npos)
+    return 1000.0;
+  return 0.0;
+}
+} // namespace
 
 DepthIntrinsics
 readIntrinsics(const std::string& path, const DepthIntrinsics& defaults)
 {
-  std::ifstream in(path);
-  if (!in)
-    throw std::invalid_argument(quoted(path) + ": cannot open intrinsics file");
+  std::istringstream in(intrinsicsText(path));
   DepthIntrinsics result = defaults;
   bool have_scale = false;
   double format_scale = 0.0;
+  std::map<std::string, int> first_line; // of each key
   std::string line;
   int line_number = 0;
   while (std::getline(in, line)) {
@@ -239,20 +291,17 @@ readIntrinsics(const std::string& path, const DepthIntrinsics& defaults)
     while (!value.empty() && (value.back() == ' ' || value.back() == '\t' || value.back() == '\r'))
       value.pop_back();
     const std::string where = quoted(path) + " line " + std::to_string(line_number);
+    const auto seen = first_line.emplace(key, line_number);
+    if (!seen.second && !isFreeTextKey(key)) // which of the two was meant is a guess
+      throw std::invalid_argument(where + ": '" + key + "' is given twice (first on line " +
+                                  std::to_string(seen.first->second) + "); give it once");
     if (key == "depth_format") {
-      static const std::regex divided(R"(value\s*/\s*([0-9]+(\.[0-9]*)?))");
-      std::smatch match;
-      if (std::regex_search(value, match, divided))
-        format_scale = std::stod(match[1].str());
-      else if (value.find("millimetre") != std::string::npos || value.find("millimeter") != std::string::npos)
-        format_scale = 1000.0;
+      format_scale = depthFormatScale(value, where);
       continue;
     }
     const bool numeric = key == "fx" || key == "fy" || key == "cx" || key == "cy" || key == "depth_scale" ||
                          key == "width" || key == "height";
-    const bool free_text = key == "sensor" || key == "distortion" || key == "note" || key == "notes" ||
-                           key == "comment" || key == "comments" || key == "source";
-    if (free_text)
+    if (isFreeTextKey(key))
       continue;
     if (!numeric)
       throw std::invalid_argument(where + ": unknown key '" + key +
@@ -281,8 +330,6 @@ readIntrinsics(const std::string& path, const DepthIntrinsics& defaults)
       (key == "width" ? result.width : result.height) = static_cast<int>(number);
   }
   result.source = path;
-  if (in.bad())
-    throw std::invalid_argument(quoted(path) + ": read error");
   if (!have_scale && format_scale > 0.0)
     result.depth_scale = format_scale;
   try {

@@ -3,6 +3,8 @@
 #include <range_nlm/io/pcd_file.h>
 
 #include <cerrno>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 
@@ -85,8 +87,8 @@ OutputFile::OutputFile(const std::string& path) : path_(path)
                      "; refusing to write over it (give a regular file, a character device such as /dev/null, or a "
                      "FIFO)");
   const fs::path target(target_);
-  temporary_ = (target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid())))
-                   .string();
+  temporary_ =
+      (target.parent_path() / (temporaryPrefix(target.filename().string()) + std::to_string(::getpid()))).string();
   fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0) {
     const int e = errno;
@@ -173,5 +175,24 @@ OutputFile::commit()
 }
 
 } // namespace detail
+
+std::string
+temporaryPrefix(const std::string& file_name)
+{
+  // The longest name a file system takes (NAME_MAX) less the longest process id (10 digits).
+  constexpr std::size_t kLongest = 255 - 10;
+  const std::string prefix = "." + file_name + ".tmp";
+  if (prefix.size() <= kLongest)
+    return prefix;
+  // A long name is cut, and a hash of the whole name keeps names that share the cut part apart.
+  std::uint64_t hash = 14695981039346656037ull; // FNV-1a
+  for (unsigned char c : file_name)
+    hash = (hash ^ c) * 1099511628211ull;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
+  const std::string tail = std::string("~") + hex + ".tmp";
+  return "." + file_name.substr(0, kLongest - 1 - tail.size()) + tail;
+}
+
 } // namespace io
 } // namespace range_nlm

@@ -14,8 +14,9 @@ namespace detail
 {
 
 /// One output file, opened by the constructor according to what `path` is:
-///  - missing or a regular file: written to ".NAME.tmpPID" beside it, which commit() fsyncs and
-///    renames over NAME; a failure or a destructor without commit() removes the temporary file;
+///  - missing or a regular file: written to ".NAME.tmpPID" beside it (io::temporaryPrefix), which
+///    commit() fsyncs and renames over NAME; a failure or a destructor without commit() removes
+///    the temporary file;
 ///  - a symbolic link (a chain of them, relative or absolute, dangling or not): followed, and its
 ///    final target written as above; the link stays a link;
 ///  - a character device (e.g. /dev/null) or a FIFO: opened and written directly, no temporary

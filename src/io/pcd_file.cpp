@@ -543,8 +543,8 @@ LoadedCloud
 loadCloud(const std::string& path, bool organized, const MemoryBudget& budget)
 {
   std::error_code ec;
-  if (!fs::exists(path, ec))
-    fail(path, "file does not exist");
+  if (!fs::exists(path, ec)) // ec: it cannot be told (e.g. a loop of symbolic links)
+    fail(path, ec ? "cannot open the file: " + ec.message() : std::string("file does not exist"));
   if (!fs::is_regular_file(path, ec))
     fail(path, "not a regular file");
   const std::uint64_t file_size = fs::file_size(path, ec);

@@ -1,7 +1,8 @@
 // range_nlm_denoise on a real Slurm cluster: a one-node cluster (munged, slurmctld, slurmd) is
 // brought up on 127.0.0.1 with every file in a temporary directory, scripts/slurm/submit.sh
-// filters a recording as a job array of shards plus a check job, and the outputs must be
-// byte-identical to one run on this machine. Skipped, saying so, where slurm-wlm and munge are
+// filters a recording as a job array of shards plus a check job, one shard is cancelled, the
+// check job fails naming what is missing, submit.sh --rerun submits that shard again, and the
+// outputs must be byte-identical to one run on this machine. Skipped, saying so, where slurm-wlm and munge are
 // not installed (scripts/setup.sh installs them).
 #include "test_support.h"
 
@@ -317,62 +318,100 @@ TEST_F(SlurmClusterTest, JobArrayOfShardsWritesWhatOneMachineWrites)
     FAIL() << "the one-node Slurm cluster did not come up: " << e.what();
   }
 
-  // Four shards, one CPU each: two run at a time on the node's two CPUs.
+  // Four shards, one CPU each, one at a time (so that shard 2 is still pending when it is
+  // cancelled): the check job runs after the array however its tasks end, and fails.
   const fs::path out = dir_ / "sharded";
+  const fs::path logs = dir_ / "sharded.logs";
   const test::CommandResult submitted =
-      test::runCommand("RANGE_NLM_CPUS=1 RANGE_NLM_DENOISE=" + kTool + " bash " + (kScripts / "submit.sh").string() +
-                       " " + in.string() + " " + out.string() + " 4 " + options);
+      test::runCommand("RANGE_NLM_CPUS=1 RANGE_NLM_ARRAY_LIMIT=1 RANGE_NLM_DENOISE=" + kTool + " bash " +
+                       (kScripts / "submit.sh").string() + " " + in.string() + " " + out.string() + " 4 " + options);
   ASSERT_EQ(submitted.status, 0) << submitted.output << cluster->logs();
   std::smatch ids;
   ASSERT_TRUE(std::regex_search(submitted.output, ids, std::regex("array job ([0-9]+) .*check job ([0-9]+)")))
       << submitted.output;
   const std::string array_job = ids[1], check_job = ids[2];
-  const fs::path logs = dir_ / "sharded.logs";
-  ASSERT_TRUE(waitForJobs(90, logs)) << "jobs left after 90 s or a failed task:\n"
-                                     << test::runCommand("squeue").output << failedTask(logs) << cluster->logs();
-
-  const std::string check = test::readBytes((logs / ("range_nlm-check-" + check_job + ".out")).string());
-  EXPECT_NE(check.find("30 input frames in " + in.string() + ", 30 outputs in " + out.string() + ", 0 missing"),
+  const test::CommandResult cancelled = test::runCommand("scancel " + array_job + "_2");
+  ASSERT_EQ(cancelled.status, 0) << cancelled.output;
+  ASSERT_TRUE(waitForJobs(90)) << "jobs left after 90 s:\n" << test::runCommand("squeue").output << cluster->logs();
+  const std::string failed = test::readBytes((logs / ("range_nlm-check-" + check_job + ".out")).string());
+  EXPECT_NE(failed.find("30 input frames in " + in.string() + ", 23 outputs in " + out.string() + ", 7 missing"),
             std::string::npos)
-      << check << cluster->logs();
-  EXPECT_NE(check.find("shards: 4 task logs, 0 failed; 30 frames written, 0 skipped"), std::string::npos) << check;
-  EXPECT_NE(check.find("frames/s"), std::string::npos) << check;
-  for (int k = 0; k < 4; ++k) {
+      << failed << cluster->logs();
+  EXPECT_NE(failed.find("shards: 3 task logs, 3 shards done"), std::string::npos) << failed;
+  EXPECT_NE(failed.find("range_nlm check: FAILED (re-run the failed shards: scripts/slurm/submit.sh --rerun " +
+                        logs.string() + ")"),
+            std::string::npos)
+      << failed;
+  for (int k : {0, 1, 3}) {
     const std::string task = test::readBytes((logs / ("range_nlm-" + array_job + "_" + std::to_string(k) + ".out")).string());
     EXPECT_NE(task.find("shard " + std::to_string(k) + "/4, 1 thread(s)"), std::string::npos) << task;
     EXPECT_NE(task.find("exit_status=0"), std::string::npos) << task;
   }
+
+  // The rerun helper submits exactly shard 2 again, with the recorded N and options.
+  const test::CommandResult rerun = test::runCommand("bash " + (kScripts / "submit.sh").string() + " --rerun " + logs.string());
+  ASSERT_EQ(rerun.status, 0) << rerun.output;
+  ASSERT_TRUE(std::regex_search(rerun.output, ids, std::regex("re-running shards 2 of 4: array job ([0-9]+), check job ([0-9]+)")))
+      << rerun.output;
+  const std::string rerun_job = ids[1], recheck_job = ids[2];
+  ASSERT_TRUE(waitForJobs(60, logs)) << test::runCommand("squeue").output << failedTask(logs) << cluster->logs();
+  const std::string rerun_log = test::readBytes((logs / ("range_nlm-" + rerun_job + "_2.out")).string());
+  EXPECT_NE(rerun_log.find("shard 2/4"), std::string::npos) << rerun_log;
+  EXPECT_NE(rerun_log.find("\"frames\":7,"), std::string::npos) << rerun_log;
+  const std::string check = test::readBytes((logs / ("range_nlm-check-" + recheck_job + ".out")).string());
+  EXPECT_NE(check.find("30 input frames in " + in.string() + ", 30 outputs in " + out.string() + ", 0 missing"),
+            std::string::npos)
+      << check;
+  EXPECT_NE(check.find("shards: 4 task logs, 4 shards done; failed: none; not finished: none"), std::string::npos)
+      << check;
+  // Each shard reads and filters its halo too: of the 30 frames, more are read than written, and
+  // the two passes filter more than twice as many.
+  std::smatch counts;
+  ASSERT_TRUE(std::regex_search(check, counts, std::regex("frames: 30 written, 0 skipped \\(--resume\\); ([0-9]+) read, "
+                                                          "([0-9]+) filtered over all passes")))
+      << check;
+  EXPECT_GT(std::stoi(counts[1]), 30) << check;
+  EXPECT_GT(std::stoi(counts[2]), 60) << check;
+  EXPECT_NE(check.find("range_nlm check: OK"), std::string::npos) << check;
+  EXPECT_EQ(check.find("temporary files"), std::string::npos) << check;
+  EXPECT_NE(test::runCommand("bash " + (kScripts / "submit.sh").string() + " --rerun " + logs.string())
+                .output.find("nothing to re-run"),
+            std::string::npos);
   ASSERT_EQ(frameFiles(out), frameFiles(single));
   for (const std::string& name : frameFiles(single))
     EXPECT_TRUE(test::readBytes((out / name).string()) == test::readBytes((single / name).string()))
         << name << " differs from the single-machine run";
 
-  // Shard 2 failed: re-run it alone as its own one-task array, with --resume.
-  for (int k : {16, 18, 20}) // shard 2 of 4 writes 16 .. 22
-    fs::remove(out / frameName(k));
-  const test::CommandResult rerun = test::runCommand(
-      "sbatch --parsable --array=2 --cpus-per-task=1 --output=" + (logs / "rerun-%A_%a.out").string() +
-      " --export=ALL,RANGE_NLM_SHARDS=4,RANGE_NLM_DENOISE=" + kTool + " " +
-      (kScripts / "range_nlm_array.sbatch").string() + " " + in.string() + " " + out.string() + " --resume " + options);
-  ASSERT_EQ(rerun.status, 0) << rerun.output;
+  // The array script submitted by hand without RANGE_NLM_DENOISE, the tool not on PATH: it takes
+  // the tool of the checkout it was submitted from (build/tools/), or says that there is none.
+  const test::CommandResult by_sbatch = test::runCommand(
+      "env -u RANGE_NLM_DENOISE PATH=/usr/bin:/bin sbatch --parsable --array=2 --cpus-per-task=1 --output=" +
+      (logs / "hand-%A_%a.txt").string() + " --export=ALL,RANGE_NLM_SHARDS=4 " +
+      (kScripts / "range_nlm_array.sbatch").string() + " " + in.string() + " " + out.string() + " " + options);
+  ASSERT_EQ(by_sbatch.status, 0) << by_sbatch.output;
   ASSERT_TRUE(waitForJobs(60)) << test::runCommand("squeue").output << cluster->logs();
-  const std::string rerun_id = rerun.output.substr(0, rerun.output.find_first_of(";\n"));
-  const std::string rerun_log = test::readBytes((logs / ("rerun-" + rerun_id + "_2.out")).string());
-  EXPECT_NE(rerun_log.find("shard 2/4"), std::string::npos) << rerun_log;
-  EXPECT_NE(rerun_log.find("\"frames\":3,"), std::string::npos) << rerun_log;
-  EXPECT_NE(rerun_log.find("\"skipped\":4,"), std::string::npos) << rerun_log;
-  for (const std::string& name : frameFiles(single))
-    EXPECT_TRUE(test::readBytes((out / name).string()) == test::readBytes((single / name).string()))
-        << name << " differs from the single-machine run after the re-run";
-  // The check script also runs by hand, outside Slurm.
-  const test::CommandResult by_hand =
-      test::runCommand("bash " + (kScripts / "range_nlm_check.sbatch").string() + " " + in.string() + " " +
-                       out.string() + " " + logs.string() + " " + array_job);
+  const std::string hand_log = test::readBytes(
+      (logs / ("hand-" + by_sbatch.output.substr(0, by_sbatch.output.find_first_of(";\n")) + "_2.txt")).string());
+  std::error_code ec;
+  if (fs::equivalent(kTool, fs::path(RANGE_NLM_SOURCE_DIR) / "build" / "tools" / "range_nlm_denoise", ec)) {
+    EXPECT_NE(hand_log.find("exit_status=0"), std::string::npos) << hand_log;
+    EXPECT_NE(hand_log.find("\"skipped\":7,"), std::string::npos) << hand_log; // --resume: all there
+  } else {
+    EXPECT_NE(hand_log.find("range_nlm_denoise not found at"), std::string::npos) << hand_log;
+    EXPECT_NE(hand_log.find("exit_status=2"), std::string::npos) << hand_log;
+  }
+
+  // The check script also runs by hand, outside Slurm and without the array job ids; a leftover
+  // temporary file is reported.
+  const std::string check_by_hand = "bash " + (kScripts / "range_nlm_check.sbatch").string() + " " + in.string() +
+                                    " " + out.string() + " " + logs.string();
+  const test::CommandResult by_hand = test::runCommand(check_by_hand);
   EXPECT_EQ(by_hand.status, 0) << by_hand.output;
+  EXPECT_NE(by_hand.output.find("shards: 4 task logs, 4 shards done"), std::string::npos) << by_hand.output;
   fs::remove(out / frameName(29));
-  const test::CommandResult missing =
-      test::runCommand("bash " + (kScripts / "range_nlm_check.sbatch").string() + " " + in.string() + " " +
-                       out.string() + " " + logs.string() + " " + array_job);
+  std::ofstream(out / ("." + frameName(29) + ".tmp4242")) << "half";
+  const test::CommandResult missing = test::runCommand(check_by_hand);
   EXPECT_EQ(missing.status, 1) << missing.output;
   EXPECT_NE(missing.output.find("1 missing\n  missing: " + frameName(29)), std::string::npos) << missing.output;
+  EXPECT_NE(missing.output.find("temporary files left by interrupted tasks: 1"), std::string::npos) << missing.output;
 }

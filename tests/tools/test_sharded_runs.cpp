@@ -411,16 +411,16 @@ TEST_F(ShardedRuns, ShardsShareTheOutputDirectoryButNotTheirFrames)
         << "shard " << k << ": " << test::readBytes((root_ / ("shard" + std::to_string(k) + ".txt")).string());
   }
   ASSERT_LT(written, 40u) << "the shards ended before they could be held";
-  EXPECT_EQ(again.status, 1) << again.output;
+  EXPECT_EQ(again.status, 4) << again.output;
   EXPECT_NE(again.output.find("frames 20..29 (scan_020.pcd .. scan_029.pcd) of output directory"), std::string::npos)
       << again.output;
   EXPECT_NE(again.output.find("are being written by another range_nlm_denoise run (holding frames 20..29"),
             std::string::npos)
       << again.output;
-  EXPECT_EQ(overlapping.status, 1) << overlapping.output;
+  EXPECT_EQ(overlapping.status, 4) << overlapping.output;
   EXPECT_NE(overlapping.output.find("are being written by another range_nlm_denoise run"), std::string::npos)
       << overlapping.output;
-  EXPECT_EQ(whole.status, 1) << whole.output;
+  EXPECT_EQ(whole.status, 4) << whole.output;
   EXPECT_NE(whole.output.find("is in use by another range_nlm_denoise run"), std::string::npos) << whole.output;
   expectSameOutputs(out, ref, "four concurrent shards");
   // Once they are done, the same shard may run again (it finds its frames finished).

@@ -1,4 +1,5 @@
 #include "cli/cli.h"
+#include "cli/pipeline.h"
 
 #include <range_nlm/parameter_registry.h>
 
@@ -18,10 +19,13 @@
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <type_traits>
 #include <variant>
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -32,29 +36,162 @@ namespace range_nlm
 namespace tools
 {
 
+namespace
+{
+/// Keeps descriptors 0, 1 and 2 taken. One that was closed (`tool >&-`) would go to the first file
+/// the tool opens, and text meant for standard output would land in an output frame; /dev/null
+/// opened read-only takes its place instead, so that writing to it fails and is reported.
+void
+reserveStandardDescriptors()
+{
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) >= 0 || errno != EBADF)
+      continue;
+    // The descriptors below fd are taken (by now), so open() returns fd itself.
+    const int reserved = ::open("/dev/null", O_RDONLY);
+    if (reserved >= 0 && reserved != fd)
+      ::close(reserved);
+  }
+}
+
+/// OMP_NUM_THREADS above the thread limit of the tools (FilterParameters::max_threads, as for
+/// --threads) would have every parallel region that does not give its own count start that many
+/// threads (100000 ends in SIGSEGV): the processor count takes its place, with a warning.
+void
+limitEnvironmentThreads(const std::string& tool)
+{
+  const int asked = defaultThreads();
+  if (asked <= FilterParameters::max_threads)
+    return;
+  const int processors = static_cast<int>(
+      std::min<unsigned>(std::max(1u, std::thread::hardware_concurrency()), FilterParameters::max_threads));
+  useThreads(processors);
+  std::cerr << tool << ": warning: OMP_NUM_THREADS asks for " << asked << " threads, more than the "
+            << FilterParameters::max_threads << " a tool may use; " << processors
+            << " (the processors) are used where --threads does not say\n";
+}
+
+/// The exit status of `body`, with its exceptions as one-line messages on stderr.
+int
+statusOf(const std::string& tool, const std::function<int()>& body)
+{
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::cerr << tool << ": usage error: " << printable(e.what()) << " (see " << tool << " --help)\n";
+    return 2;
+  } catch (const po::error& e) {
+    std::cerr << tool << ": usage error: " << printable(e.what()) << " (see " << tool << " --help)\n";
+    return 2;
+  } catch (const LockConflict& e) {
+    std::cerr << tool << ": error: " << printable(e.what()) << "\n";
+    return 4;
+  } catch (const std::bad_alloc&) {
+    std::cerr << tool << ": error: out of memory (lower --memory-limit to refuse large frames up front, or free "
+                         "memory)\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << printable(e.what()) << "\n";
+    return 1;
+  }
+}
+
+/// std::cout's buffer: written with write(2), every return checked and the first error's errno
+/// kept, since stdio has forgotten why a write failed by the time the tool ends.
+class CheckedOutput : public std::streambuf
+{
+public:
+  CheckedOutput() { setp(buffer_, buffer_ + sizeof buffer_); }
+  /// The errno of the first write that failed, 0 if none did.
+  int error() const { return error_; }
+
+protected:
+  int_type overflow(int_type c) override
+  {
+    if (sync() != 0)
+      return traits_type::eof();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override
+  {
+    const char* p = pbase();
+    bool ok = true;
+    while (ok && p < pptr()) {
+      const ssize_t n = ::write(STDOUT_FILENO, p, static_cast<std::size_t>(pptr() - p));
+      if (n < 0 && errno == EINTR)
+        continue;
+      ok = n > 0;
+      if (!ok && error_ == 0)
+        error_ = n < 0 ? errno : ENOSPC;
+      p += ok ? n : 0;
+    }
+    setp(buffer_, buffer_ + sizeof buffer_); // what could not be written is dropped
+    return ok ? 0 : -1;
+  }
+
+private:
+  char buffer_[4096];
+  int error_ = 0;
+};
+
+/// `status`, or 1 if what the tool printed on standard output could not all be written (a full
+/// disk, a closed descriptor): a summary redirected to a file must not be lost silently.
+int
+checkStandardOutput(const std::string& tool, int status, const CheckedOutput& output)
+{
+  std::cout.flush();
+  const bool c_flushed = std::fflush(stdout) == 0 && !std::ferror(stdout); // anything printed with stdio
+  if (output.error() == 0 && c_flushed && std::cout.good())
+    return status;
+  std::cerr << tool << ": error: cannot write standard output"
+            << (output.error() != 0 ? std::string(": ") + std::strerror(output.error()) : std::string()) << "\n";
+  return status == 0 || status == 3 ? 1 : status;
+}
+} // namespace
+
+std::string
+printable(const std::string& text)
+{
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const unsigned char byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte != 0x7f) {
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else {
+      char escape[5];
+      std::snprintf(escape, sizeof escape, "\\x%02x", byte);
+      out += escape;
+    }
+  }
+  return out;
+}
+
 int
 runTool(const std::string& tool, const std::function<int()>& body)
 {
+  reserveStandardDescriptors();
+  limitEnvironmentThreads(tool);
   // PCL's own console messages would add lines to our one-line errors.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   // A FIFO output whose reader went away then fails a write with EPIPE, reported with the file's
   // name, instead of killing the tool silently.
   ::signal(SIGPIPE, SIG_IGN);
-  try {
-    return body();
-  } catch (const UsageError& e) {
-    std::cerr << tool << ": usage error: " << e.what() << " (see " << tool << " --help)\n";
-    return 2;
-  } catch (const po::error& e) {
-    std::cerr << tool << ": usage error: " << e.what() << " (see " << tool << " --help)\n";
-    return 2;
-  } catch (const std::invalid_argument& e) {
-    std::cerr << tool << ": error: " << e.what() << "\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << tool << ": error: " << e.what() << "\n";
-    return 1;
-  }
+  CheckedOutput output;
+  std::streambuf* const original = std::cout.rdbuf(&output);
+  const int status = checkStandardOutput(tool, statusOf(tool, body), output);
+  std::cout.rdbuf(original); // `output` ends here; the stream is flushed again at exit
+  return status;
 }
 
 bool
@@ -191,6 +328,7 @@ filterParametersFrom(const po::variables_map& vm)
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  useThreads(p.threads); // also for the parallel regions that do not take the parameter
   return p;
 }
 
@@ -202,7 +340,10 @@ listFrames(const std::string& directory, const std::string& extension)
     throw InputError("input directory '" + directory + "' does not exist or is not a directory");
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(directory, ec)) {
-    if (!entry.is_regular_file())
+    // An entry whose kind cannot be told (a loop of symbolic links) is kept: reading it then
+    // names it and says why, and --keep-going skips it like any unreadable frame.
+    std::error_code kind_error;
+    if (!entry.is_regular_file(kind_error) && !kind_error)
       continue;
     const std::string name = entry.path().filename().string();
     if (name.size() > extension.size() &&
@@ -233,6 +374,29 @@ prepareOutputDirectory(const std::string& input_dir, const std::string& output_d
   fs::create_directories(output_dir, ec);
   if (ec)
     throw InputError("cannot create output directory '" + output_dir + "': " + ec.message());
+}
+
+void
+refuseOutputsThatAreInputs(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
+                           const std::string& remedy)
+{
+  // A file is its device and inode: that sees through symbolic links and hard links alike.
+  std::map<std::pair<dev_t, ino_t>, const std::string*> files;
+  struct stat st;
+  for (const std::string& input : inputs)
+    if (::stat(input.c_str(), &st) == 0 && S_ISREG(st.st_mode))
+      files.emplace(std::make_pair(st.st_dev, st.st_ino), &input);
+  for (const std::string& output : outputs) {
+    if (::stat(output.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+      continue;
+    const auto found = files.find(std::make_pair(st.st_dev, st.st_ino));
+    if (found == files.end())
+      continue;
+    const std::string& input = *found->second;
+    throw InputError("output '" + output + "' is the input file" +
+                     (input == output ? std::string() : " '" + input + "' (the same file, through a link)") +
+                     "; refusing to overwrite the input" + remedy);
+  }
 }
 
 std::string
@@ -447,7 +611,7 @@ DefaultIntrinsicsWarning::frameRead(const std::string& path)
 {
   if (defaults_.empty() || !isDepthImagePath(path))
     return;
-  std::cerr << tool_ << ": warning: '" << path << "' and any other depth PNG are read with default intrinsics ("
+  std::cerr << tool_ << ": warning: '" << printable(path) << "' and any other depth PNG are read with default intrinsics ("
             << defaults_ << ": a 640 x 480 Kinect v1 / TUM RGB-D camera); give --intrinsics FILE or the options "
             << "for your camera, or the depths and positions are wrong\n"
             << std::flush;

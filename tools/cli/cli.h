@@ -43,11 +43,24 @@ struct UsageError : std::runtime_error
 };
 /// Unreadable or invalid input, failed processing: exit status 1.
 using io::InputError;
+/// Another run holds the output directory or the frames (run_lock.h): exit status 4. Nothing was
+/// written; the same command succeeds once the other run has ended.
+struct LockConflict : InputError
+{
+  using InputError::InputError;
+};
 
 /// Runs `body` and maps exceptions to one-line messages on stderr and exit statuses
-/// (0 success, 1 input/processing error, 2 usage error).
+/// (0 success, 1 input/processing error, 2 usage error, 4 LockConflict). Standard output that could not all be
+/// written (a full disk, a closed descriptor) turns a success into status 1 with a message.
 int
 runTool(const std::string& tool, const std::function<int()>& body);
+
+/// `text` with its control characters written as escapes (\n, \t, \r, \xHH): a file name may
+/// hold any byte but '/' and NUL, and printed raw it could split a one-line message or drive the
+/// terminal. For every file name and message a tool prints as text (JSON escapes its own).
+std::string
+printable(const std::string& text);
 
 /// Parses argv against `options` (+ positional), throwing UsageError with boost's message.
 /// Returns false if --help was given (help text already printed to stdout).
@@ -66,8 +79,9 @@ addFilterOptions(boost::program_options::options_description& options);
 FilterParameters
 filterParametersFrom(const boost::program_options::variables_map& vm);
 
-/// The *.pcd files of a directory, sorted by name. Throws InputError if the directory is
-/// missing or holds no .pcd file.
+/// The *.pcd files of a directory, sorted by name (with any entry of such a name whose kind
+/// cannot be told, e.g. a loop of symbolic links, for reading it to report). Throws InputError if
+/// the directory is missing or holds no .pcd file.
 std::vector<std::string>
 listFrames(const std::string& directory, const std::string& extension = ".pcd");
 
@@ -75,6 +89,14 @@ listFrames(const std::string& directory, const std::string& extension = ".pcd");
 /// creates it if missing.
 void
 prepareOutputDirectory(const std::string& input_dir, const std::string& output_dir, bool allow_same);
+
+/// Throws InputError if one of `outputs` is one of `inputs`: the same path, or another path of the
+/// same regular file (a symbolic link to it, or a hard link), since writing it would replace the
+/// input. `remedy` ends the message, e.g. " (use --overwrite)". Outputs that do not exist yet,
+/// devices and FIFOs pass.
+void
+refuseOutputsThatAreInputs(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
+                           const std::string& remedy);
 
 /// Joins a directory and a file name.
 std::string

@@ -43,7 +43,7 @@ warnClamping(const std::string& output_path, const DepthClamping& clamping, doub
     warning << "; ";
   if (clamping.below > 0)
     warning << clamping.below << " pixel(s) filtered to less than " << 0.5 / depth_scale << " m stored as 1";
-  std::cerr << warning.str() << "\n" << std::flush;
+  std::cerr << printable(warning.str()) << "\n" << std::flush;
 }
 
 } // namespace

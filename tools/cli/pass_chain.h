@@ -51,6 +51,9 @@ public:
     return feed(0, {{frame, {}}}, false);
   }
   std::vector<ChainOutput> flush() { return feed(0, {}, true); }
+  /// Frames filtered so far, counted once per pass that filtered them (the halo of a shard and
+  /// the history of a recursive pass included).
+  std::size_t framesFiltered() const { return filtered_; }
 
 private:
   /// One pass: its stream and which of its frames the next pass (or the output) reads.
@@ -69,6 +72,7 @@ private:
 
   std::vector<Level> levels_;
   std::vector<bool> inputs_read_;
+  std::size_t filtered_ = 0;
 };
 
 } // namespace tools

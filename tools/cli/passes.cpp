@@ -4,6 +4,7 @@
 
 #include <range_nlm/parameter_registry.h>
 
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -61,11 +62,14 @@ parsePass(const std::string& spec, const Pass& base)
   Pass pass = base;
   std::stringstream ss(spec);
   std::string item;
+  std::set<std::string> keys;
   while (std::getline(ss, item, ',')) {
     const auto eq = item.find('=');
     if (eq == std::string::npos)
       throw UsageError("--pass '" + spec + "': expected key=value items, got '" + item + "'");
     const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+    if (!keys.insert(key).second) // which of the two was meant is a guess
+      throw UsageError("--pass '" + spec + "': '" + key + "' is given twice; give it once");
     if (key == "radius") {
       pass.radius = parseRadius(spec, value);
       continue;

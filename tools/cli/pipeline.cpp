@@ -1,11 +1,42 @@
 #include "cli/pipeline.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace range_nlm
 {
 namespace tools
 {
 
-WriteBehind::WriteBehind() : thread_([this] { work(); }) {}
+int
+defaultThreads()
+{
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+void
+useThreads(int threads)
+{
+#ifdef _OPENMP
+  if (threads > 0)
+    omp_set_num_threads(threads);
+#else
+  (void)threads;
+#endif
+}
+
+WriteBehind::WriteBehind()
+    : thread_([this, threads = defaultThreads()] {
+        useThreads(threads);
+        work();
+      })
+{
+}
 
 WriteBehind::~WriteBehind()
 {

@@ -20,6 +20,16 @@ namespace range_nlm
 namespace tools
 {
 
+/// The number of threads the OpenMP parallel regions the calling thread starts use when they do
+/// not give one (1 without OpenMP).
+int
+defaultThreads();
+/// Sets that number for the calling thread; `threads` <= 0 leaves it. A thread starts with the
+/// number OMP_NUM_THREADS gave, whatever its parent set: the tools' threads below take their
+/// parent's, so that --threads holds in every thread.
+void
+useThreads(int threads);
+
 /// Produces items 0, 1, ..., count - 1 with `produce(i)` on a thread of its own, one item ahead of
 /// the caller: item i + 1 is produced while the caller works on item i, never further ahead. An
 /// exception of `produce(i)` is kept and thrown by the next() that returns item i, so the caller
@@ -32,7 +42,10 @@ public:
       : count_(count), produce_(std::move(produce))
   {
     if (count_ > 0)
-      thread_ = std::thread([this] { work(); });
+      thread_ = std::thread([this, threads = defaultThreads()] {
+        useThreads(threads);
+        work();
+      });
   }
   /// Stops producing (an item being produced is finished first) and joins the thread.
   ~ReadAhead()

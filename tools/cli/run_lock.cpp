@@ -36,7 +36,7 @@ removeTemporaries(const std::vector<std::string>& outputs)
   namespace fs = std::filesystem;
   std::vector<std::string> prefixes;
   for (const std::string& output : outputs)
-    prefixes.push_back("." + fileName(output) + ".tmp");
+    prefixes.push_back(io::temporaryPrefix(fileName(output)));
   std::error_code ec;
   const fs::path dir = fs::path(outputs.front()).parent_path();
   for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec)) {
@@ -61,7 +61,7 @@ OutputDirectoryLock::OutputDirectoryLock(const std::string& directory, bool excl
     ::close(fd_);
     fd_ = -1;
     if (error == EWOULDBLOCK)
-      throw InputError("output directory '" + dir +
+      throw LockConflict("output directory '" + dir +
                        "' is in use by another range_nlm_denoise run; wait for it to end or write elsewhere");
     throw InputError("cannot lock output directory '" + dir + "': " + std::strerror(error));
   }
@@ -110,7 +110,7 @@ FrameRangeLock::FrameRangeLock(const std::string& directory, const FrameRange& f
     const std::size_t end = holder.l_len == 0 ? inputs.size() : first + static_cast<std::size_t>(holder.l_len);
     message += " (holding frames " + describe({first, std::min(end, inputs.size())}, inputs) + ")";
   }
-  throw InputError(message + "; wait for it to end, or give each run its own shard");
+  throw LockConflict(message + "; wait for it to end, or give each run its own shard");
 }
 
 FrameRangeLock::~FrameRangeLock()

@@ -14,7 +14,7 @@ namespace tools
 {
 
 /// For --resume: removes the temporary files an interrupted run left beside `outputs`
-/// (".NAME.tmpPID", see saveCloudAtomic). The caller holds the output directory exclusively
+/// (".NAME.tmpPID", see io::temporaryPrefix). The caller holds the output directory exclusively
 /// (OutputDirectoryLock), or with --shard those outputs (FrameRangeLock), so no running
 /// range_nlm_denoise can own one of them.
 void
@@ -28,7 +28,7 @@ removeTemporaries(const std::vector<std::string>& outputs);
 class OutputDirectoryLock
 {
 public:
-  /// Throws InputError if the directory cannot be opened or another run holds it.
+  /// Throws InputError if the directory cannot be opened, LockConflict if another run holds it.
   OutputDirectoryLock(const std::string& directory, bool exclusive);
   ~OutputDirectoryLock();
   OutputDirectoryLock(const OutputDirectoryLock&) = delete;
@@ -50,7 +50,7 @@ class FrameRangeLock
 public:
   static constexpr const char* kFileName = ".range_nlm_denoise.lock";
 
-  /// Locks `frames` of `inputs` (nothing for an empty range). Throws InputError naming the frames
+  /// Locks `frames` of `inputs` (nothing for an empty range). Throws LockConflict naming the frames
   /// (and those of the run holding them, where the kernel tells) if another run holds any of them.
   FrameRangeLock(const std::string& directory, const FrameRange& frames, const std::vector<std::string>& inputs);
   ~FrameRangeLock();

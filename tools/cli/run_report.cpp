@@ -1,5 +1,7 @@
 #include "cli/run_report.h"
 
+#include "cli/cli.h"
+
 #include <nlohmann/json.hpp>
 
 #include <iomanip>
@@ -35,19 +37,20 @@ void
 printFrameLine(const FrameReport& report)
 {
   if (report.unfiltered.empty())
-    std::cout << report.name << ": " << std::fixed << std::setprecision(1) << report.milliseconds << " ms, d = "
+    std::cout << printable(report.name) << ": " << std::fixed << std::setprecision(1) << report.milliseconds << " ms, d = "
               << std::setprecision(6) << report.bandwidths.distance << ", s = " << report.bandwidths.similarity
               << (report.outliers_moved > 0 ? ", " + std::to_string(report.outliers_moved) + " outliers moved"
                                             : std::string())
               << std::endl;
   else
-    std::cout << report.name << ": not filtered, written unchanged (" << report.unfiltered << ")" << std::endl;
+    std::cout << printable(report.name) << ": not filtered, written unchanged (" << printable(report.unfiltered) << ")"
+              << std::endl;
 }
 
 void
 printSkippedLine(const std::string& name)
 {
-  std::cout << name << ": skipped (complete output exists)" << std::endl;
+  std::cout << printable(name) << ": skipped (complete output exists)" << std::endl;
 }
 
 void
@@ -81,6 +84,9 @@ printSummaryJson(const Summary& s, const ShardJob& sharding, std::size_t sequenc
   out["width"] = s.width;
   out["height"] = s.height;
   out["filter_ms_total"] = total;
+  out["frames_read"] = s.frames_read;
+  out["frames_filtered"] = s.frames_filtered;
+  out["filter_ms_all"] = s.filtered_ms;
   out["wall_ms"] = s.wall_ms;
   out["outputs"] = outputs;
   if (sharding.sharded)
@@ -101,7 +107,7 @@ reportEnd(const Summary& summary, bool quiet)
   if (!summary.unreadable.empty()) {
     std::cerr << "range_nlm_denoise: " << summary.unreadable.size() << " frame(s) could not be read and were skipped:\n";
     for (const auto& u : summary.unreadable)
-      std::cerr << "  " << u.second << "\n"; // the message names the file
+      std::cerr << "  " << printable(u.second) << "\n"; // the message names the file
     std::cerr << std::flush;
     return 3;
   }

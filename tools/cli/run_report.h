@@ -34,6 +34,10 @@ struct Summary
   std::vector<FrameReport> written;
   std::size_t skipped = 0; // --resume: complete output existed
   std::vector<std::pair<std::string, std::string>> unreadable; // file, error
+  /// Frames loaded, and frames filtered, once per pass that filtered them, with their filter time:
+  /// with the halo of a shard and the history of a recursive pass, the run's real cost.
+  std::size_t frames_read = 0, frames_filtered = 0;
+  double filtered_ms = 0.0;
   unsigned width = 0, height = 0;
   double wall_ms = 0.0;
 };

@@ -25,16 +25,22 @@ namespace range_nlm
 /// The defaults are the common ROS/TUM RGB-D values for a 640 x 480 Kinect v1 frame.
 struct DepthIntrinsics
 {
-  /// Focal length along x, pixels. > 0, default 525.
+  /// Valid ranges: every back-projected point of a 16-bit image is then a finite float that is
+  /// not rounded to 0 (a focal length of 1e308 would make every x -0, a tiny one infinite).
+  static constexpr double kMinFocalLength = 1.0, kMaxFocalLength = 1e6;
+  static constexpr double kMaxPrincipalPoint = 1e6;
+  static constexpr double kMinDepthScale = 1e-3, kMaxDepthScale = 1e9;
+
+  /// Focal length along x, pixels, 1 ... 1e6; default 525.
   double fx = 525.0;
-  /// Focal length along y, pixels. > 0, default 525.
+  /// Focal length along y, pixels, 1 ... 1e6; default 525.
   double fy = 525.0;
-  /// Principal point, column, pixels. Finite, default 319.5.
+  /// Principal point, column, pixels, -1e6 ... 1e6; default 319.5.
   double cx = 319.5;
-  /// Principal point, row, pixels. Finite, default 239.5.
+  /// Principal point, row, pixels, -1e6 ... 1e6; default 239.5.
   double cy = 239.5;
-  /// Stored values per metre: z [m] = value / depth_scale. > 0; default 5000 (TUM RGB-D);
-  /// 1000 for millimetre images (RealSense, Azure Kinect).
+  /// Stored values per metre: z [m] = value / depth_scale, 1e-3 ... 1e9; default 5000 (TUM
+  /// RGB-D); 1000 for millimetre images (RealSense, Azure Kinect).
   double depth_scale = 5000.0;
   /// Image size the intrinsics belong to, pixels; 0 = not known (any size is accepted). Set
   /// from the `width` / `height` lines of an intrinsics file; depthImageToCloud refuses an image
@@ -49,16 +55,18 @@ struct DepthIntrinsics
 };
 
 /// Reads an `intrinsics.txt` file: one `key value` pair per line, `#` starts a comment, blank
-/// lines are skipped. Numeric keys: `fx`, `fy`, `cx`, `cy` (pixels), `depth_scale` (values per
-/// metre), `width` and `height` (positive integers: the image size the intrinsics belong to,
-/// checked against every image read with them). A `depth_format` line is free text; when there
-/// is no `depth_scale` line, the scale is taken from it if it says `value / N` (scale N) or
-/// `millimetres`/`millimeters` (scale 1000). The free-text keys `sensor`, `distortion`, `note`,
-/// `notes`, `comment`, `comments` and `source` are documentation and not read. Any other key is
-/// refused (a misspelt `depth_scale` must not silently leave the default in place). Missing keys
-/// keep their value from `defaults`; `source` is set to `path`.
-/// Throws std::invalid_argument naming the file (and line) if it cannot be read, a key is
-/// unknown, a numeric value does not parse, or the result fails DepthIntrinsics::validate().
+/// lines are skipped; a file longer than 1 MB is refused. Numeric keys: `fx`, `fy`, `cx`, `cy`
+/// (pixels), `depth_scale` (values per metre), `width` and `height` (positive integers: the image
+/// size the intrinsics belong to, checked against every image read with them). A `depth_format`
+/// line is free text; when there is no `depth_scale` line, the scale is taken from it if it says
+/// `value / N` (scale N > 0) or `millimetres`/`millimeters` (scale 1000). The free-text keys
+/// `sensor`, `distortion`, `note`, `notes`, `comment`, `comments` and `source` are documentation
+/// and not read. Any other key is refused (a misspelt `depth_scale` must not silently leave the
+/// default in place), and so is a key given twice. Missing keys keep their value from `defaults`;
+/// `source` is set to `path`.
+/// Throws std::invalid_argument naming the file (and line) if it cannot be read or is too long, a
+/// key is unknown or repeated, a numeric value does not parse, `depth_format` divides by 0, or the
+/// result fails DepthIntrinsics::validate().
 DepthIntrinsics
 readIntrinsics(const std::string& path, const DepthIntrinsics& defaults = DepthIntrinsics());
 

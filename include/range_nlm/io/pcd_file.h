@@ -49,7 +49,7 @@ void
 writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& blob);
 
 /// Saves binary PCD (the bytes PCL's PCDWriter::writeBinary writes) with write(2), every return
-/// checked: to a temporary name in the same directory, fsynced and renamed into place, so no
+/// checked: to a temporary name in the same directory (temporaryPrefix), fsynced and renamed into place, so no
 /// half-written file ever carries the final name and a full disk gives an error, never SIGBUS.
 /// A symbolic link is followed (its target is replaced, the link stays); a character device
 /// (/dev/null) or FIFO is written directly; a directory, block device or socket is refused.
@@ -68,6 +68,12 @@ saveCloudAtomic(const std::string& path, const pcl::PointCloud<PointT>& cloud)
   pcl::toPCLPointCloud2(cloud, blob);
   saveCloudAtomic(path, blob, cloud.sensor_origin_, cloud.sensor_orientation_);
 }
+
+/// The name of the temporary file saveCloudAtomic (and writeDepthPng) writes for an output named
+/// `file_name`, less the process id that follows it: ".NAME.tmp", or for a name too long for that
+/// (the whole must stay within 255 bytes) the name cut short, "~" and a hash of the whole name.
+std::string
+temporaryPrefix(const std::string& file_name);
 
 /// True if `path` ends in ".png" (any case): such inputs are read as 16-bit depth images.
 bool
