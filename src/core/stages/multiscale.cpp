@@ -210,19 +210,35 @@ reduceActive(const std::vector<unsigned char>& active, int width, int height, st
         coarse[static_cast<std::size_t>(v / 2) * w + u / 2] = 1;
 }
 
-/// The parameters of the coarser scale: one scale fewer, contiguous windows unless a dilation is
-/// given (correlated noise is close to white there).
+/// A window of `side` pixels at the finer scale as the odd window that covers the same part of
+/// the frame at the coarser one (at least `least`).
+int
+coarserWindow(int side, int least)
+{
+  const int half = (side + 1) / 2;
+  return std::max(least, half % 2 == 0 ? half + 1 : half);
+}
+
+/// The parameters of the coarser scale: one scale fewer; windows that cover the part of the frame
+/// the finer scale's cover (a coarse window of the finer size would smooth details twice as large,
+/// and carry that up as if it were noise); one iteration (the finer scale iterates); contiguous
+/// windows unless a dilation is given (correlated noise is close to white there).
 FilterParameters
 coarserParameters(const FilterParameters& parameters, int scales)
 {
   FilterParameters coarse = parameters;
   coarse.scales = scales - 1;
+  coarse.iterations = 1;
+  coarse.search_window = coarserWindow(parameters.search_window, 3);
+  coarse.normal_window = coarserWindow(parameters.normal_window, 3);
+  if (parameters.normal_presmooth_window > 1)
+    coarse.normal_presmooth_window = coarserWindow(parameters.normal_presmooth_window, 3);
   if (coarse.dilation == 0)
     coarse.dilation = 1;
   return coarse;
 }
 
-/// The parameters of the one-scale run at the finest scale.
+/// The parameters of the one-scale run at the finest scale (before its dilation is chosen).
 FilterParameters
 oneScaleParameters(const FilterParameters& parameters)
 {
@@ -253,6 +269,13 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
 {
   const int threads = resolveThreads(parameters.threads);
   const Grid& input = *frames[center];
+  // The finest scale's dilation describes the sensor's noise: chosen on the frame as given, not
+  // on the frame with the coarser scales' corrections, whose remaining noise is less correlated.
+  FilterParameters fine = oneScaleParameters(parameters);
+  {
+    StageTracker split(workspace.observer, 0);
+    fine.dilation = chooseDilation(input, parameters, split);
+  }
   StageTracker stage(workspace.observer, 0);
   stage.start(Stage::pyramid);
   NoiseProfile profile;
@@ -261,7 +284,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
                                    viewpoint, threads);
   } catch (const UnfilterableFrame&) {
     stage.stop();
-    runOneScale(frames, center, oneScaleParameters(parameters), viewpoint, active, workspace); // reports it
+    runOneScale(frames, center, fine, viewpoint, active, workspace); // reports it
     return;
   }
   rangesOf(input, viewpoint, threads, workspace.ranges);
@@ -288,7 +311,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
     else
       runOneScale(coarse_frames, center, coarse_parameters, viewpoint, coarse_active, coarse);
   } catch (const UnfilterableFrame&) {
-    runOneScale(frames, center, oneScaleParameters(parameters), viewpoint, active, workspace);
+    runOneScale(frames, center, fine, viewpoint, active, workspace);
     return;
   }
   stage.start(Stage::pyramid);
@@ -303,7 +326,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
   // corrections (and its temporal neighbours as they are).
   std::vector<const Grid*> carried = frames;
   carried[center] = &workspace.carried;
-  runOneScale(carried, center, oneScaleParameters(parameters), viewpoint, active, workspace);
+  runOneScale(carried, center, fine, viewpoint, active, workspace);
 }
 
 } // namespace detail
