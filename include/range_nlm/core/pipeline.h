@@ -340,8 +340,8 @@ enum class Stage
   /// applyOffsets.
   displacement
 };
-/// Number of Stage values.
-constexpr int kStageCount = 10;
+/// Number of Stage values (displacement is the last).
+constexpr int kStageCount = static_cast<int>(Stage::displacement) + 1;
 /// A short name of the stage ("normals", "offsets", ...).
 const char*
 toString(Stage stage);
