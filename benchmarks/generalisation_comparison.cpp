@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <stdexcept>
 
 namespace range_nlm
@@ -76,6 +77,8 @@ struct Cell
   double scale = 0.0, length = 0.0;
   FrameMetrics noisy;
   std::vector<ScoredRow> rows;
+  /// Seconds spent in each family's smoothers (without the scoring).
+  std::map<std::string, double> seconds;
 };
 
 Cell
@@ -85,11 +88,14 @@ measureCell(const SceneOptions& scene, const std::vector<const std::vector<Smoot
   EvaluationOptions eval;
   eval.threads = threads;
   Cell cell{toString(scene.scene), *scene.noise_scale, scene.stereo_correlation_length,
-            evaluateFrame(frame.truth, frame.noisy, nullptr, eval), {}};
+            evaluateFrame(frame.truth, frame.noisy, nullptr, eval), {}, {}};
   for (const auto* family : families)
-    for (const Smoother& s : *family)
-      cell.rows.push_back(
-          ScoredRow{s.family, s.setting, evaluateFrame(frame.truth, s.apply(frame.noisy), &frame.noisy, eval), {}});
+    for (const Smoother& s : *family) {
+      const auto start = std::chrono::steady_clock::now();
+      const Cloud result = s.apply(frame.noisy);
+      cell.seconds[s.family] += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      cell.rows.push_back(ScoredRow{s.family, s.setting, evaluateFrame(frame.truth, result, &frame.noisy, eval), {}});
+    }
   return cell;
 }
 
@@ -148,8 +154,30 @@ reportCell(const Cell& cell, peer_grids::WinTally& tally, std::ostream& report, 
   } else {
     report << "- |\n";
   }
-  log << std::endl;
+  log << " (seconds:";
+  for (const auto& [family, seconds] : cell.seconds)
+    log << " " << family << " " << fixed(seconds, 1);
+  log << ")" << std::endl;
   return j;
+}
+
+/// "1.0" or "0.5, 1.0": the noise scales of a list.
+std::string
+scaleList(const std::vector<double>& scales)
+{
+  std::string text;
+  for (double s : scales)
+    text += (text.empty() ? "" : ", ") + fixed(s, 1);
+  return text;
+}
+
+/// Where MovingLeastSquares runs, for the table's preamble.
+std::string
+mlsScope(const std::vector<double>& scales)
+{
+  return scales.empty() ? "left out"
+                        : "in the cells at noise scale " + scaleList(scales) +
+                              " only (its radius grid costs about three times the rest of a cell)";
 }
 
 } // namespace
@@ -182,7 +210,7 @@ makeQuick(Options& options)
 {
   options.noise_scales = {1.0};
   options.correlation_lengths = {0, 2, 4, 8};
-  options.include_mls = false;
+  options.mls_noise_scales.clear();
 }
 
 void
@@ -191,28 +219,32 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
   const auto start = std::chrono::steady_clock::now();
   const std::vector<Smoother> ours = rangeNlmSmoothers(options);
   const std::vector<Smoother> fb = peer_grids::fastBilateralGrid();
-  const std::vector<Smoother> mls = options.include_mls ? peer_grids::mlsGrid() : std::vector<Smoother>{};
+  const std::vector<Smoother> mls = peer_grids::mlsGrid(options.threads);
+  const std::vector<Smoother> none;
+  const auto& mls_scales = options.mls_noise_scales;
   report << "## Stereo noise by correlation length and strength (point-to-plane RMSE against ground truth, mm)\n\n"
          << "Scenes " << options.width << "x" << options.height
          << ", stereo sensor model (correlated share 0.8), seed " << kFirstSeed
          << " for the first scene and one more for each next. FastBilateral and MLS: the setting of each grid with "
             "the smallest flat + feature RMSE in that cell (best-balanced)"
-         << (options.include_mls ? "" : "; MLS left out") << ". \"(wins)\": flat and feature RMSE both at most "
-         << "both peers' best-balanced.\n\n";
+         << "; MLS " << mlsScope(mls_scales) << ". \"(wins)\": flat and feature RMSE both at most the best-balanced of each peer that ran.\n\n";
   printHeader(ours, report);
   peer_grids::WinTally tally;
   nlohmann::json cells = nlohmann::json::array();
   for (std::size_t k = 0; k < options.scenes.size(); ++k)
     for (double scale : options.noise_scales)
       for (double length : options.correlation_lengths) {
-        const Cell cell = measureCell(cellScene(options, k, scale, length), {&ours, &fb, &mls}, options.threads);
+        const bool with_mls = std::find(mls_scales.begin(), mls_scales.end(), scale) != mls_scales.end();
+        const Cell cell =
+            measureCell(cellScene(options, k, scale, length), {&ours, &fb, with_mls ? &mls : &none}, options.threads);
         cells.push_back(reportCell(cell, tally, report, log));
       }
   std::vector<std::string> settings;
   for (const Smoother& s : ours)
     settings.push_back(s.setting);
   report << "\n";
-  tally.print(report, settings, "cells", options.include_mls ? "FastBilateral and MLS" : "FastBilateral");
+  tally.print(report, settings, "cells",
+              mls_scales.empty() ? "FastBilateral" : "FastBilateral, and MLS at noise scale " + scaleList(mls_scales));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report << "\n" << cells.size() << " cells in " << fixed(seconds / 60.0, 1) << " min.\n";
   if (json) {

@@ -44,12 +44,12 @@ fastBilateralGrid()
 }
 
 std::vector<Smoother>
-mlsGrid()
+mlsGrid(int threads)
 {
   std::vector<Smoother> s;
   for (double radius : {0.02, 0.03, 0.05})
     s.push_back(Smoother{"MLS", "order 2, radius " + fixed(radius, 2) + " m",
-                         [=](const Cloud& in) { return quality::movingLeastSquares(in, radius); }});
+                         [=](const Cloud& in) { return quality::movingLeastSquares(in, radius, unsigned(threads)); }});
   return s;
 }
 

@@ -44,9 +44,10 @@ fastBilateral(float sigma_s, float sigma_r);
 /// FastBilateral with sigma_s 3, 5, 7, 10, 15 px and sigma_r 0.01, 0.03, 0.05, 0.1 m.
 std::vector<Smoother>
 fastBilateralGrid();
-/// pcl::MovingLeastSquares of order 2 with radius 0.02, 0.03, 0.05 m (family "MLS").
+/// pcl::MovingLeastSquares of order 2 with radius 0.02, 0.03, 0.05 m (family "MLS"), on
+/// `threads` threads (0 = all cores).
 std::vector<Smoother>
-mlsGrid();
+mlsGrid(int threads);
 
 /// One smoother's result on a generated scene, scored against the truth.
 struct ScoredRow

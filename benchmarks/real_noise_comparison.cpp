@@ -162,7 +162,7 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
   nlohmann::json out = nlohmann::json::object();
   const std::vector<Smoother> ours = rangeNlmSmoothers(options.threads);
   const std::vector<Smoother> fb = peer_grids::fastBilateralGrid();
-  const std::vector<Smoother> mls = options.include_mls ? peer_grids::mlsGrid() : std::vector<Smoother>{};
+  const std::vector<Smoother> mls = options.include_mls ? peer_grids::mlsGrid(options.threads) : std::vector<Smoother>{};
 
   // 1. Generated scenes with ground truth.
   peer_grids::WinTally tally;
