@@ -471,16 +471,17 @@ stepsShapes()
     const Vec3 centre = foot + stair * Vec3(0.0, -0.5 * heights[i], (i + 0.5) * tread);
     shapes.push_back(std::make_shared<Box>(centre, stair, Vec3(half_width, 0.5 * heights[i], 0.5 * tread)));
   }
-  // Tilted panel at 0.85 m - 1.15 m: turned 50 degrees and pitched 20 degrees.
+  // Tilted panel at 0.85 m - 1.15 m: turned 50 degrees and pitched 20 degrees. (Each
+  // rectangle's normal axis_u x axis_v faces the camera, as the truth normals do.)
   const Mat3 tilt = rotation(-50.0, 20.0);
   shapes.push_back(
-      std::make_shared<Rectangle>(Vec3(0.45, 0.0, 1.0), tilt * Vec3::UnitX(), tilt * Vec3::UnitY(), 0.18, 0.2));
+      std::make_shared<Rectangle>(Vec3(0.45, 0.0, 1.0), tilt * Vec3::UnitY(), tilt * Vec3::UnitX(), 0.2, 0.18));
   // Folded panel (a dihedral opening toward the camera): two 0.35 m wide halves meeting in a
   // vertical concave crease at x = 0.05 m, z = 1.9 m, each turned 40 degrees.
   const Vec3 hinge(0.05, -0.25, 1.9);
   for (double side : {-1.0, 1.0}) {
     const Vec3 along(side * std::cos(degreesToRadians(40.0)), 0.0, -std::sin(degreesToRadians(40.0)));
-    shapes.push_back(std::make_shared<Rectangle>(hinge + 0.175 * along, along, Vec3::UnitY(), 0.175, 0.2));
+    shapes.push_back(std::make_shared<Rectangle>(hinge + 0.175 * along, along, -side * Vec3::UnitY(), 0.175, 0.2));
   }
   return shapes;
 }
