@@ -3,7 +3,6 @@
 #include "peer_grids.h"
 
 #include <range_nlm/eval/synthetic_scene.h>
-#include <range_nlm/nonlocal_means_filter.h>
 
 #include <nlohmann/json.hpp>
 
@@ -41,15 +40,7 @@ rangeNlmSmoothers(const Options& options)
   std::vector<Smoother> s;
   for (Setting setting : settings) {
     setting.parameters.threads = options.threads;
-    const FilterParameters p = setting.parameters;
-    s.push_back(Smoother{"range_nlm", setting.name, [p](const Cloud& in) {
-                           NonLocalMeansFilter<pcl::PointXYZ> f;
-                           f.setParameters(p);
-                           f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
-                           Cloud out;
-                           f.filter(out);
-                           return out;
-                         }});
+    s.push_back(peer_grids::rangeNlm(setting.name, setting.parameters));
   }
   return s;
 }

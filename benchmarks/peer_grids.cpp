@@ -1,6 +1,8 @@
 #include "peer_grids.h"
 #include "quality_comparison.h"
 
+#include <range_nlm/nonlocal_means_filter.h>
+
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -24,6 +26,19 @@ std::string
 mm(double metres)
 {
   return std::isfinite(metres) ? fixed(1000.0 * metres, 2) : "-";
+}
+
+Smoother
+rangeNlm(const std::string& setting, const FilterParameters& parameters)
+{
+  return Smoother{"range_nlm", setting, [parameters](const Cloud& in) {
+                    NonLocalMeansFilter<pcl::PointXYZ> f;
+                    f.setParameters(parameters);
+                    f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
+                    Cloud out;
+                    f.filter(out);
+                    return out;
+                  }};
 }
 
 Smoother

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <range_nlm/eval/metrics.h>
+#include <range_nlm/parameters.h>
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -38,6 +39,9 @@ fixed(double v, int digits);
 std::string
 mm(double metres);
 
+/// range_nlm's NonLocalMeansFilter with `parameters` (family "range_nlm").
+Smoother
+rangeNlm(const std::string& setting, const FilterParameters& parameters);
 /// pcl::FastBilateralFilter at one setting (family "FastBilateral").
 Smoother
 fastBilateral(float sigma_s, float sigma_r);

@@ -8,7 +8,6 @@
 #include <range_nlm/eval/synthetic_scene.h>
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/io/pcd_file.h>
-#include <range_nlm/nonlocal_means_filter.h>
 
 #include <nlohmann/json.hpp>
 
@@ -38,24 +37,13 @@ using peer_grids::mm;
 using peer_grids::ScoredRow;
 using peer_grids::Smoother;
 
-Cloud
-rangeNlm(const Cloud& in, FilterParameters p)
-{
-  NonLocalMeansFilter<pcl::PointXYZ> f;
-  f.setParameters(p);
-  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
-  Cloud out;
-  f.filter(out);
-  return out;
-}
-
 std::vector<Smoother>
 rangeNlmSmoothers(int threads)
 {
   std::vector<Smoother> s;
   for (auto [name, p] : variants()) {
     p.threads = threads;
-    s.push_back(Smoother{"range_nlm", name, [p](const Cloud& in) { return rangeNlm(in, p); }});
+    s.push_back(peer_grids::rangeNlm(name, p));
   }
   return s;
 }
