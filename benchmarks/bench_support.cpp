@@ -2,6 +2,7 @@
 
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/io/pcd_file.h>
+#include <range_nlm/parameter_registry.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -618,6 +619,18 @@ loadXyzFrame(const std::string& path)
       intrinsics = readIntrinsics(above.string());
   }
   return io::xyzFromBlob(io::loadFrame(path, intrinsics), path);
+}
+
+void
+setRegistryField(const std::string& item, FilterParameters& p)
+{
+  const std::size_t eq = item.find('=');
+  const ParameterEntry* entry = eq == std::string::npos ? nullptr : findParameter(item.substr(0, eq));
+  if (!entry)
+    throw std::invalid_argument("expected NAME=VALUE with NAME a field of FilterParameters (the field table of "
+                                "docs/method.md), e.g. patch_edge_gate=0");
+  setParameterFromText(*entry, p, item.substr(eq + 1));
+  checkParameter(*entry, p);
 }
 
 } // namespace bench

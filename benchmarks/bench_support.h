@@ -3,6 +3,8 @@
 // preparation (centre crop, fresh depth-camera noise) the benchmark configurations need.
 #pragma once
 
+#include <range_nlm/parameters.h>
+
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
@@ -129,6 +131,12 @@ medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud);
 /// Throws std::invalid_argument naming the file if it cannot be read.
 pcl::PointCloud<pcl::PointXYZ>
 loadXyzFrame(const std::string& path);
+
+/// Sets one field of `p` from "NAME=VALUE", NAME a field of the parameter registry (the field
+/// table of docs/method.md), and checks it against its range. Throws std::invalid_argument
+/// saying what is wrong (no such field, a bad or out-of-range value).
+void
+setRegistryField(const std::string& item, FilterParameters& p);
 
 } // namespace bench
 } // namespace tools

@@ -63,9 +63,9 @@ fastBilateral(const Cloud& in, float sigma_s, float sigma_r)
 }
 
 Cloud
-movingLeastSquares(const Cloud& in, double radius)
+movingLeastSquares(const Cloud& in, double radius, unsigned threads)
 {
-  const auto mls = bench::makeMovingLeastSquares(radius, 1);
+  const auto mls = bench::makeMovingLeastSquares(radius, threads);
   bench::setMlsInput(*mls, Cloud::ConstPtr(new Cloud(in)));
   Cloud projected;
   mls->process(projected);

@@ -24,9 +24,10 @@ namespace quality
 pcl::PointCloud<pcl::PointXYZ>
 fastBilateral(const pcl::PointCloud<pcl::PointXYZ>& in, float sigma_s, float sigma_r);
 /// MovingLeastSquares (order 2, KdTree radius search over the finite points); each input point
-/// is replaced by its projection, points MLS drops become NaN.
+/// is replaced by its projection, points MLS drops become NaN. `threads` 0 = all cores; the
+/// result does not depend on it.
 pcl::PointCloud<pcl::PointXYZ>
-movingLeastSquares(const pcl::PointCloud<pcl::PointXYZ>& in, double radius);
+movingLeastSquares(const pcl::PointCloud<pcl::PointXYZ>& in, double radius, unsigned threads = 1);
 
 /// A method with a name and parameter description, applied to a sequence (frames in time
 /// order); returns the filtered centre frame.

@@ -3,6 +3,7 @@
 // configurations, each method in a child process of its own (its own peak memory) and the
 // methods of a configuration taking turns (a warm-up call, then the timed one).
 #include "bench_support.h"
+#include "generalisation_comparison.h"
 #include "peers.h"
 #include "quality_comparison.h"
 #include "real_noise_comparison.h"
@@ -36,6 +37,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <tuple>
 
 #ifndef RANGE_NLM_DATA_DIR
 #error "RANGE_NLM_DATA_DIR must name the directory of the shipped frames"
@@ -170,15 +172,8 @@ describe(const Settings& s)
 void
 applyParameterOption(const std::string& spec, FilterParameters& p)
 {
-  const std::size_t eq = spec.find('=');
-  const std::string name = spec.substr(0, eq);
-  const ParameterEntry* entry = eq == std::string::npos ? nullptr : findParameter(name);
-  if (!entry)
-    throw UsageError("--parameter '" + spec + "': expected NAME=VALUE with NAME a field of FilterParameters " +
-                     "(the field table of docs/method.md), e.g. patch_edge_gate=0");
   try {
-    setParameterFromText(*entry, p, spec.substr(eq + 1));
-    checkParameter(*entry, p);
+    bench::setRegistryField(spec, p);
   } catch (const std::invalid_argument& e) {
     throw UsageError("--parameter '" + spec + "': " + e.what());
   }
@@ -1152,6 +1147,38 @@ printJson(std::ostream& out, const Settings& s, const RunInfo& info, const std::
   out << "]}" << std::endl;
 }
 
+/// The frame size of --quality-size (WxH, at least 16x16).
+std::pair<int, int>
+qualitySize(const po::variables_map& vm)
+{
+  int w = 0, h = 0;
+  char x = 0;
+  std::istringstream size(vm["quality-size"].as<std::string>());
+  if (!(size >> w >> x >> h) || x != 'x' || w < 16 || h < 16 || !size.eof())
+    throw UsageError("--quality-size '" + vm["quality-size"].as<std::string>() + "' is invalid: expected WxH, at least 16x16");
+  return {w, h};
+}
+
+/// --generalisation: the options of the table from the command line.
+generalisation::Options
+generalisationOptions(const po::variables_map& vm)
+{
+  generalisation::Options g;
+  g.threads = vm["threads"].as<int>();
+  std::tie(g.width, g.height) = qualitySize(vm);
+  if (vm.count("generalisation-quick"))
+    generalisation::makeQuick(g);
+  if (vm.count("generalisation-setting"))
+    for (const std::string& spec : vm["generalisation-setting"].as<std::vector<std::string>>()) {
+      try {
+        g.extra_settings.push_back(generalisation::settingFromText(spec));
+      } catch (const std::invalid_argument& e) {
+        throw UsageError(std::string("--generalisation-setting ") + e.what());
+      }
+    }
+  return g;
+}
+
 /// --quality or --temporal-comparison: accuracy instead of timing.
 void
 runComparison(const po::variables_map& vm)
@@ -1160,7 +1187,11 @@ runComparison(const po::variables_map& vm)
   std::ostringstream sink;
   std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
   std::ostringstream report, json_text;
-  if (vm.count("real-noise")) {
+  if (vm.count("generalisation")) {
+    generalisation::run(generalisationOptions(vm), log, report, &json_text);
+    if (json)
+      report.str(json_text.str());
+  } else if (vm.count("real-noise")) {
     real_noise::Options r;
     r.threads = vm["threads"].as<int>();
     if (vm.count("real-noise-quick")) {
@@ -1176,11 +1207,7 @@ runComparison(const po::variables_map& vm)
   } else if (vm.count("quality")) {
     quality::Options q = quality::defaultOptions();
     q.threads = vm["threads"].as<int>();
-    int w = 0, h = 0;
-    char x = 0;
-    std::istringstream size(vm["quality-size"].as<std::string>());
-    if (!(size >> w >> x >> h) || x != 'x' || w < 16 || h < 16)
-      throw UsageError("--quality-size '" + vm["quality-size"].as<std::string>() + "' is invalid: expected WxH, at least 16x16");
+    const auto [w, h] = qualitySize(vm);
     for (auto& scenario : q.scenarios)
       scenario.width = w, scenario.height = h;
     const auto rows = quality::run(q, log);
@@ -1419,7 +1446,11 @@ run(int argc, char** argv)
     ("json", "print one JSON object instead of the table")
     ("json-file", po::value<std::string>(), "also write that JSON object to this file")
     ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
-    ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality scenes, WxH")
+    ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality and --generalisation scenes, WxH")
+    ("generalisation", "instead of timing: range_nlm's default (and each --generalisation-setting) against the best-balanced settings of grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares on the stereo sensor model at correlation lengths 0, 1, 2, 3, 4, 6 and 8 px and noise scales 0.5, 1 and 2, on the boxes and steps scenes (noise the default was not tuned on)")
+    ("generalisation-quick", "--generalisation: noise scale 1 only, correlation lengths 0, 2, 4 and 8 px, without MovingLeastSquares")
+    ("generalisation-setting", po::value<std::vector<std::string>>(),
+     "NAME=VALUE[,NAME=VALUE...], repeatable: --generalisation also scores range_nlm's default with these fields of FilterParameters (the parameter registry) set, e.g. iterations=3")
     ("real-noise", "instead of timing: range_nlm's settings against grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares under realistic sensor noise: generated scenes with the stereo, kinect1, tof and kinect noise models (ground truth), the real frames in data/ (residual of their planar regions, interior and border band) and static real sequences (jitter)")
     ("real-noise-data", po::value<std::string>()->default_value(""), "--real-noise, --temporal-comparison: another folder laid out like data/ whose real frames are also used (e.g. one holding depth-images/realsense-d435-static/pose4 and pose5 for the jitter)")
     ("real-noise-renders", po::value<std::string>()->default_value(""), "--real-noise: write a flat-shaded image raw | range_nlm default | FastBilateral (sigma_s 5, sigma_r 0.03) of each real frame into this folder")
@@ -1433,7 +1464,7 @@ run(int argc, char** argv)
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
 
-  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise"))
+  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation"))
     runComparison(vm);
   else
     runTiming(settingsFrom(vm));

@@ -1,5 +1,6 @@
 #include "real_noise_comparison.h"
 #include "bench_support.h"
+#include "peer_grids.h"
 #include "quality_comparison.h"
 
 #include <range_nlm/core/pipeline.h>
@@ -7,7 +8,6 @@
 #include <range_nlm/eval/synthetic_scene.h>
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/io/pcd_file.h>
-#include <range_nlm/nonlocal_means_filter.h>
 
 #include <nlohmann/json.hpp>
 
@@ -32,36 +32,10 @@ namespace fs = std::filesystem;
 
 namespace
 {
-struct Smoother
-{
-  std::string family, setting;
-  std::function<Cloud(const Cloud&)> apply;
-};
-
-std::string
-fixed(double v, int digits)
-{
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
-std::string
-mm(double metres)
-{
-  return std::isfinite(metres) ? fixed(1000.0 * metres, 2) : "-";
-}
-
-Cloud
-rangeNlm(const Cloud& in, FilterParameters p)
-{
-  NonLocalMeansFilter<pcl::PointXYZ> f;
-  f.setParameters(p);
-  f.setInputCloud(Cloud::ConstPtr(new Cloud(in)));
-  Cloud out;
-  f.filter(out);
-  return out;
-}
+using peer_grids::fixed;
+using peer_grids::mm;
+using peer_grids::ScoredRow;
+using peer_grids::Smoother;
 
 std::vector<Smoother>
 rangeNlmSmoothers(int threads)
@@ -69,35 +43,8 @@ rangeNlmSmoothers(int threads)
   std::vector<Smoother> s;
   for (auto [name, p] : variants()) {
     p.threads = threads;
-    s.push_back(Smoother{"range_nlm", name, [p](const Cloud& in) { return rangeNlm(in, p); }});
+    s.push_back(peer_grids::rangeNlm(name, p));
   }
-  return s;
-}
-
-Smoother
-fastBilateral(float sigma_s, float sigma_r)
-{
-  return Smoother{"FastBilateral", "sigma_s " + fixed(sigma_s, 0) + ", sigma_r " + fixed(sigma_r, 2),
-                  [=](const Cloud& in) { return quality::fastBilateral(in, sigma_s, sigma_r); }};
-}
-
-std::vector<Smoother>
-fastBilateralGrid()
-{
-  std::vector<Smoother> s;
-  for (float sigma_s : {3.0f, 5.0f, 7.0f, 10.0f, 15.0f})
-    for (float sigma_r : {0.01f, 0.03f, 0.05f, 0.1f})
-      s.push_back(fastBilateral(sigma_s, sigma_r));
-  return s;
-}
-
-std::vector<Smoother>
-mlsGrid()
-{
-  std::vector<Smoother> s;
-  for (double radius : {0.02, 0.03, 0.05})
-    s.push_back(Smoother{"MLS", "order 2, radius " + fixed(radius, 2) + " m",
-                         [=](const Cloud& in) { return quality::movingLeastSquares(in, radius); }});
   return s;
 }
 
@@ -118,13 +65,6 @@ correlationText(const Cloud& c)
   return s.str();
 }
 
-struct GeneratedRow
-{
-  std::string family, setting;
-  FrameMetrics m;
-  Cloud result;
-};
-
 /// `result` with every point made invalid whose pixel is invalid in `other`: scored against the
 /// truth, the points both kept.
 Cloud
@@ -138,16 +78,6 @@ keptByBoth(const Cloud& result, const Cloud& other)
   return both;
 }
 
-/// The row of a family with the smallest flat + feature RMSE.
-const GeneratedRow*
-balanced(const std::vector<GeneratedRow>& rows, const std::string& family)
-{
-  const GeneratedRow* best = nullptr;
-  for (const GeneratedRow& r : rows)
-    if (r.family == family && (!best || r.m.flat_rmse + r.m.feature_rmse < best->m.flat_rmse + best->m.feature_rmse))
-      best = &r;
-  return best;
-}
 } // namespace
 
 std::vector<std::pair<std::string, FilterParameters>>
@@ -222,12 +152,11 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
 {
   nlohmann::json out = nlohmann::json::object();
   const std::vector<Smoother> ours = rangeNlmSmoothers(options.threads);
-  const std::vector<Smoother> fb = fastBilateralGrid();
-  const std::vector<Smoother> mls = options.include_mls ? mlsGrid() : std::vector<Smoother>{};
+  const std::vector<Smoother> fb = peer_grids::fastBilateralGrid();
+  const std::vector<Smoother> mls = options.include_mls ? peer_grids::mlsGrid(options.threads) : std::vector<Smoother>{};
 
   // 1. Generated scenes with ground truth.
-  std::map<std::string, std::pair<int, int>> wins; // variant: scenes won on both / scenes
-  std::map<std::string, std::pair<double, double>> log_ratio; // variant: sum of log(flat ratio), log(feature ratio)
+  peer_grids::WinTally tally;
   std::ostringstream like_for_like; // rows of the scenes on which MLS's best-balanced setting lost points
   report << "## Generated scenes with sensor noise (point-to-plane RMSE against ground truth, mm)\n\n"
          << "FastBilateral and MLS: the setting of each grid with the smallest flat + feature RMSE on that scene "
@@ -252,20 +181,20 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
         EvaluationOptions eval;
         eval.threads = options.threads;
         const std::string name = model + " x" + fixed(scale, 1) + " seed " + std::to_string(seed);
-        std::vector<GeneratedRow> rows;
+        std::vector<ScoredRow> rows;
         log << name << ": " << correlationText(frame.noisy) << std::endl;
         const FrameMetrics noisy = evaluateFrame(frame.truth, frame.noisy, nullptr, eval);
         for (const auto* family : {&ours, &fb, &mls})
           for (const Smoother& s : *family) {
             Cloud result = s.apply(frame.noisy);
             const FrameMetrics m = evaluateFrame(frame.truth, result, &frame.noisy, eval);
-            rows.push_back(GeneratedRow{s.family, s.setting, m, std::move(result)});
+            rows.push_back(ScoredRow{s.family, s.setting, m, std::move(result)});
           }
-        const GeneratedRow* fb_best = balanced(rows, "FastBilateral");
-        const GeneratedRow* mls_best = balanced(rows, "MLS");
+        const ScoredRow* fb_best = peer_grids::bestBalanced(rows, "FastBilateral");
+        const ScoredRow* mls_best = peer_grids::bestBalanced(rows, "MLS");
         if (mls_best && mls_best->m.points_lost > 0) {
           // The RMSEs skip lost points: the default scored again on the points MLS kept.
-          const GeneratedRow& ours_default = rows.front();
+          const ScoredRow& ours_default = rows.front();
           const FrameMetrics m =
               evaluateFrame(frame.truth, keptByBoth(ours_default.result, mls_best->result), &frame.noisy, eval);
           like_for_like << "| " << name << " | " << mls_best->m.points_lost << " | " << mm(ours_default.m.flat_rmse)
@@ -277,16 +206,10 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
         report << "| " << name << " | " << mm(noisy.flat_rmse) << " / " << mm(noisy.feature_rmse) << " | ";
         nlohmann::json& j = out["generated"][name];
         j["noisy"] = {noisy.flat_rmse * 1e3, noisy.feature_rmse * 1e3};
-        for (const GeneratedRow& r : rows)
+        for (const ScoredRow& r : rows)
           if (r.family == "range_nlm") {
-            const bool win = r.m.flat_rmse <= fb_best->m.flat_rmse && r.m.feature_rmse <= fb_best->m.feature_rmse &&
-                             (!mls_best || (r.m.flat_rmse <= mls_best->m.flat_rmse &&
-                                            r.m.feature_rmse <= mls_best->m.feature_rmse));
+            const bool win = tally.add(r.setting, r.m, fb_best->m, mls_best ? &mls_best->m : nullptr);
             report << mm(r.m.flat_rmse) << " / " << mm(r.m.feature_rmse) << (win ? " (wins)" : "") << " | ";
-            wins[r.setting].first += win ? 1 : 0;
-            wins[r.setting].second += 1;
-            log_ratio[r.setting].first += std::log(r.m.flat_rmse / fb_best->m.flat_rmse);
-            log_ratio[r.setting].second += std::log(r.m.feature_rmse / fb_best->m.feature_rmse);
             j[r.setting] = {r.m.flat_rmse * 1e3, r.m.feature_rmse * 1e3};
           }
         report << mm(fb_best->m.flat_rmse) << " / " << mm(fb_best->m.feature_rmse) << " (" << fb_best->setting << ") | ";
@@ -299,21 +222,16 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
           report << "- |\n";
         }
         log << name << ": FastBilateral " << mm(fb_best->m.flat_rmse) << " / " << mm(fb_best->m.feature_rmse);
-        for (const GeneratedRow& r : rows)
+        for (const ScoredRow& r : rows)
           if (r.family == "range_nlm")
             log << "; " << r.setting << " " << mm(r.m.flat_rmse) << " / " << mm(r.m.feature_rmse);
         log << std::endl;
       }
-  report << "\n| range_nlm setting | scenes won on both (vs FastBilateral and MLS) | flat RMSE / FastBilateral "
-            "(geometric mean) | feature RMSE / FastBilateral |\n|---|---|---|---|\n";
-  for (const Smoother& s : ours) {
-    const auto& w = wins[s.setting];
-    const auto& l = log_ratio[s.setting];
-    if (w.second == 0)
-      continue;
-    report << "| " << s.setting << " | " << w.first << " of " << w.second << " | "
-           << fixed(std::exp(l.first / w.second), 2) << " | " << fixed(std::exp(l.second / w.second), 2) << " |\n";
-  }
+  report << "\n";
+  std::vector<std::string> settings;
+  for (const Smoother& s : ours)
+    settings.push_back(s.setting);
+  tally.print(report, settings, "scenes", "FastBilateral and MLS");
 
   if (!like_for_like.str().empty())
     report << "\n### Where MovingLeastSquares drops points\n\nThe RMSEs skip lost points (range_nlm and "
@@ -323,8 +241,8 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
            << like_for_like.str();
 
   // 2. Real frames: residual of the raw frame's planar regions.
-  const std::vector<Smoother> fb_real{fastBilateral(5.0f, 0.03f), fastBilateral(10.0f, 0.05f),
-                                      fastBilateral(15.0f, 0.05f)};
+  const std::vector<Smoother> fb_real{peer_grids::fastBilateral(5.0f, 0.03f), peer_grids::fastBilateral(10.0f, 0.05f),
+                                      peer_grids::fastBilateral(15.0f, 0.05f)};
   if (!options.real_frames.empty()) {
     report << "\n## Real frames: residual to the planes of the raw frame's planar regions (RMS, mm; interior / border "
               "band of 3 px; points lost)\n\n| frame | regions | raw | ";

@@ -449,6 +449,43 @@ rotation(double yaw_degrees, double pitch_degrees)
       .toRotationMatrix();
 }
 
+/// The shapes of SceneType::steps. Every surface is planar, so each edge and crease is exact: the
+/// risers and treads of the stairs meet in convex and concave creases, the steps end in depth
+/// edges against the floor and wall, the tilted panel is seen at a steep angle and the folded
+/// panel has one concave crease.
+std::vector<std::shared_ptr<const Shape>>
+stepsShapes()
+{
+  std::vector<std::shared_ptr<const Shape>> shapes;
+  // Room: floor at y = 0.55 m (seen from 1.2 m on), back wall at z = 3 m; both finite.
+  const double floor_y = 0.55, wall_z = 3.0;
+  shapes.push_back(std::make_shared<Rectangle>(Vec3(0.1, floor_y, 1.9), Vec3::UnitX(), Vec3::UnitZ(), 1.5, 1.1));
+  shapes.push_back(std::make_shared<Rectangle>(Vec3(0.1, -0.2, wall_z), Vec3::UnitY(), Vec3::UnitX(), 0.75, 1.5));
+  // Staircase of three steps 0.10, 0.22 and 0.30 m high (uneven risers), treads 0.18 m deep,
+  // climbing away from the camera, turned 30 degrees so that risers and treads are seen obliquely.
+  const Mat3 stair = rotation(30.0, 0.0);
+  const Vec3 foot(-0.35, floor_y, 1.6);
+  const double tread = 0.18, half_width = 0.3;
+  const double heights[] = {0.10, 0.22, 0.30};
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 centre = foot + stair * Vec3(0.0, -0.5 * heights[i], (i + 0.5) * tread);
+    shapes.push_back(std::make_shared<Box>(centre, stair, Vec3(half_width, 0.5 * heights[i], 0.5 * tread)));
+  }
+  // Tilted panel at 0.85 m - 1.15 m: turned 50 degrees and pitched 20 degrees. (Each
+  // rectangle's normal axis_u x axis_v faces the camera, as the truth normals do.)
+  const Mat3 tilt = rotation(-50.0, 20.0);
+  shapes.push_back(
+      std::make_shared<Rectangle>(Vec3(0.45, 0.0, 1.0), tilt * Vec3::UnitY(), tilt * Vec3::UnitX(), 0.2, 0.18));
+  // Folded panel (a dihedral opening toward the camera): two 0.35 m wide halves meeting in a
+  // vertical concave crease at x = 0.05 m, z = 1.9 m, each turned 40 degrees.
+  const Vec3 hinge(0.05, -0.25, 1.9);
+  for (double side : {-1.0, 1.0}) {
+    const Vec3 along(side * std::cos(degreesToRadians(40.0)), 0.0, -std::sin(degreesToRadians(40.0)));
+    shapes.push_back(std::make_shared<Rectangle>(hinge + 0.175 * along, along, -side * Vec3::UnitY(), 0.175, 0.2));
+  }
+  return shapes;
+}
+
 /// Uniform in [0, 1) from the top 53 bits: the same sequence on every platform.
 double
 uniform(std::mt19937_64& rng)
@@ -769,7 +806,9 @@ sceneTypeFromString(const std::string& name)
     return SceneType::boxes;
   if (name == "plane")
     return SceneType::plane;
-  throw std::invalid_argument("unknown scene '" + name + "' (expected boxes or plane)");
+  if (name == "steps")
+    return SceneType::steps;
+  throw std::invalid_argument("unknown scene '" + name + "' (expected boxes, plane or steps)");
 }
 
 NoiseModel
@@ -806,7 +845,15 @@ motionFromString(const std::string& name)
 std::string
 toString(SceneType scene)
 {
-  return scene == SceneType::boxes ? "boxes" : "plane";
+  switch (scene) {
+  case SceneType::boxes:
+    return "boxes";
+  case SceneType::plane:
+    return "plane";
+  case SceneType::steps:
+    return "steps";
+  }
+  return "unknown";
 }
 
 std::string
@@ -935,7 +982,7 @@ SceneOptions::validate() const
   if (!std::isfinite(motion_step))
     fail("motion_step", motion_step, "must be finite (metres per frame)");
   if (motion == Motion::moving_box && scene != SceneType::boxes)
-    fail("motion", toString(motion), "needs the boxes scene (the plane scene has nothing to move)");
+    fail("motion", toString(motion), "needs the boxes scene (the plane and steps scenes have nothing to move)");
 }
 
 Scene
@@ -947,6 +994,10 @@ Scene::build(const SceneOptions& options, int frame)
   Scene scene;
   if (options.scene == SceneType::plane) {
     scene.shapes_.push_back(std::make_shared<Plane>(Vec3(0, 0, options.plane_depth), Vec3(0, 0, -1)));
+    return scene;
+  }
+  if (options.scene == SceneType::steps) {
+    scene.shapes_ = stepsShapes();
     return scene;
   }
   // Room: floor at y = 0.7 m (1.5 m - 3 m deep in view), back wall at z = 3 m; both finite, so

@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <set>
 
 using namespace range_nlm;
 
@@ -161,13 +162,19 @@ TEST(SyntheticScene, BoxesSceneShowsEveryObjectOverTheDepthRange)
   EXPECT_LE(z_max, 3.0f + 1e-5f);
 }
 
-TEST(SyntheticScene, TruthPointsLieOnTheirAnalyticSurfacesWithTheirNormals)
+namespace
 {
-  SceneOptions o;
-  o.noise = NoiseModel::none;
+
+/// Every truth point of the scene `o` lies on the surface of the shape its pixel records, with a
+/// unit normal facing the camera that agrees with the shape's own normal (but at edges), and no
+/// shape occludes it. Sets `checked` to the number of points checked.
+void
+expectTruthOnAnalyticSurfaces(const SceneOptions& o, std::size_t& checked)
+{
   const SyntheticFrame f = renderFrame(o);
   const Scene scene = Scene::build(o, 0);
-  std::size_t checked = 0, normal_mismatch = 0;
+  checked = 0;
+  std::size_t normal_mismatch = 0;
   for (std::size_t i = 0; i < f.truth.size(); ++i) {
     const int s = f.shape_index[i];
     if (s < 0)
@@ -191,9 +198,64 @@ TEST(SyntheticScene, TruthPointsLieOnTheirAnalyticSurfacesWithTheirNormals)
     }
     ++checked;
   }
-  EXPECT_GT(checked, 200000u);
   // Only pixels exactly on an edge or crease may disagree about the nearest face.
-  EXPECT_LT(double(normal_mismatch), 1e-3 * double(checked));
+  EXPECT_LT(double(normal_mismatch), 1e-3 * double(checked)) << toString(o.scene);
+}
+
+} // namespace
+
+TEST(SyntheticScene, TruthPointsLieOnTheirAnalyticSurfacesWithTheirNormals)
+{
+  SceneOptions o;
+  o.noise = NoiseModel::none;
+  std::size_t checked = 0;
+  expectTruthOnAnalyticSurfaces(o, checked);
+  EXPECT_GT(checked, 200000u);
+}
+
+TEST(SyntheticScene, StepsTruthPointsLieOnTheirAnalyticSurfacesWithUnitNormals)
+{
+  SceneOptions o;
+  o.scene = SceneType::steps;
+  o.noise = NoiseModel::none;
+  std::size_t checked = 0;
+  expectTruthOnAnalyticSurfaces(o, checked);
+  EXPECT_GT(checked, 200000u);
+}
+
+// The steps scene: floor, wall, three steps, the tilted panel and the two halves of the folded
+// panel all in view over 0.8 m - 3 m; the treads of the three steps at their three heights.
+TEST(SyntheticScene, StepsSceneShowsEveryShapeOverTheDepthRange)
+{
+  SceneOptions o;
+  o.scene = SceneType::steps;
+  o.noise = NoiseModel::none;
+  EXPECT_EQ(sceneTypeFromString("steps"), SceneType::steps);
+  EXPECT_EQ(toString(SceneType::steps), "steps");
+  const SyntheticFrame f = renderFrame(o);
+  const Scene scene = Scene::build(o, 0);
+  ASSERT_EQ(scene.shapes().size(), 8u);
+  std::vector<int> pixels(scene.shapes().size(), 0);
+  std::set<int> tread_heights_mm;
+  float z_min = 1e9f, z_max = 0.0f;
+  for (std::size_t i = 0; i < f.truth.size(); ++i) {
+    const int s = f.shape_index[i];
+    EXPECT_EQ(s >= 0, valid(f.noisy[i]));
+    if (s < 0)
+      continue;
+    ++pixels[s];
+    const pcl::PointNormal& t = f.truth[i];
+    z_min = std::min(z_min, t.z);
+    z_max = std::max(z_max, t.z);
+    if (scene.shapes()[s]->name() == "box" && t.normal_y < -0.999f)
+      tread_heights_mm.insert(int(std::lround(1000.0 * (0.55 - t.y))));
+  }
+  for (std::size_t s = 0; s < pixels.size(); ++s)
+    EXPECT_GT(pixels[s], 2000) << "shape " << s << " (" << scene.shapes()[s]->name() << ")";
+  EXPECT_EQ(tread_heights_mm, (std::set<int>{100, 220, 300}));
+  EXPECT_LT(z_min, 0.9f);
+  EXPECT_GT(z_max, 2.9f);
+  EXPECT_LE(z_max, 3.0f + 1e-5f);
 }
 
 TEST(SyntheticScene, RidgedPanelHasTwoFacetOrientationsThreeMillimetresHigh)
@@ -455,6 +517,7 @@ TEST(SyntheticScene, InvalidOptionsThrowNamingTheOption)
   EXPECT_EQ(noiseModelFromString("stripes"), NoiseModel::stripes);
   EXPECT_EQ(motionFromString("moving"), Motion::moving_box);
   EXPECT_EQ(sceneTypeFromString("plane"), SceneType::plane);
+  EXPECT_THROW(sceneTypeFromString("stairs"), std::invalid_argument);
 }
 
 namespace
@@ -828,6 +891,17 @@ TEST(SyntheticScene, ToolTakesTheSensorModelOptionsAndNamesABadValue)
   o.height = 48;
   o.stereo_subpixel = 0.25;
   EXPECT_TRUE(identical(noisy, renderFrame(o).noisy)) << "the tool writes the library's frame";
+  r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --scene steps --width 64 --height 48 -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "noisy" / "frame_0000.pcd").string(), noisy), 0);
+  o = SceneOptions{};
+  o.scene = SceneType::steps;
+  o.width = 64;
+  o.height = 48;
+  EXPECT_TRUE(identical(noisy, renderFrame(o).noisy)) << "--scene steps renders the steps scene";
+  r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --scene stairs");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("'stairs'"), std::string::npos) << r.output;
   r = test::runTool("range_nlm_synth", "--output-dir " + dir.string() + " --noise kinect1 --kinect1-block 8");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("kinect1_block = 8"), std::string::npos) << r.output;

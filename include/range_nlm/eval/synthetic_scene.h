@@ -28,7 +28,11 @@ enum class SceneType
   /// capped cylinder and a panel with 3 mm high, 10 mm period ridges, at depths 0.8 m - 3 m.
   boxes,
   /// One infinite fronto-parallel plane at SceneOptions::plane_depth (for calibration and tests).
-  plane
+  plane,
+  /// Depth edges and creases, all planar, at depths 0.8 m - 3 m: floor and back wall (finite
+  /// rectangles), a staircase of three steps of uneven height (0.10, 0.22, 0.30 m) turned 30
+  /// degrees, a panel tilted 50 degrees to the view and a folded panel with a concave crease.
+  steps
 };
 
 /// Depth-sensor noise added to the noisy frame. The depth error e moves a point along its camera
@@ -102,7 +106,7 @@ enum class Motion
   moving_box
 };
 
-/// Parses "boxes" / "plane"; throws std::invalid_argument naming the value otherwise.
+/// Parses "boxes" / "plane" / "steps"; throws std::invalid_argument naming the value otherwise.
 SceneType
 sceneTypeFromString(const std::string& name);
 /// Parses "none" / "kinect" / "laser" / "stripes" / "stereo" / "kinect1" / "tof"; throws
