@@ -37,6 +37,7 @@ accessors()
       RANGE_NLM_ACCESSORS(search_window, SearchWindowSize),
       RANGE_NLM_ACCESSORS(patch_size, PatchSize),
       RANGE_NLM_ACCESSORS(dilation, Dilation),
+      RANGE_NLM_ACCESSORS(scales, Scales),
       RANGE_NLM_ACCESSORS(iterations, Iterations),
       RANGE_NLM_ACCESSORS(threads, NumberOfThreads),
       RANGE_NLM_ACCESSORS(distance_bandwidth, DistanceBandwidth),
