@@ -392,8 +392,9 @@ TEST_F(SlurmClusterTest, JobArrayOfShardsWritesWhatOneMachineWrites)
   ASSERT_TRUE(waitForJobs(60)) << test::runCommand("squeue").output << cluster->logs();
   const std::string hand_log = test::readBytes(
       (logs / ("hand-" + by_sbatch.output.substr(0, by_sbatch.output.find_first_of(";\n")) + "_2.txt")).string());
+  // Whichever build the test runs from (the sanitizer build too), the script looks in build/tools/.
   std::error_code ec;
-  if (fs::equivalent(kTool, fs::path(RANGE_NLM_SOURCE_DIR) / "build" / "tools" / "range_nlm_denoise", ec)) {
+  if (fs::exists(fs::path(RANGE_NLM_SOURCE_DIR) / "build" / "tools" / "range_nlm_denoise", ec)) {
     EXPECT_NE(hand_log.find("exit_status=0"), std::string::npos) << hand_log;
     EXPECT_NE(hand_log.find("\"skipped\":7,"), std::string::npos) << hand_log; // --resume: all there
   } else {
