@@ -202,6 +202,14 @@ filterParametersFromParameters(const ros::NodeHandle& node)
   return p;
 }
 
+range_nlm::TemporalWindow
+windowOf(bool causal, bool recursive)
+{
+  return recursive ? range_nlm::TemporalWindow::recursive
+         : causal  ? range_nlm::TemporalWindow::causal
+                   : range_nlm::TemporalWindow::centred;
+}
+
 StreamSettings
 streamSettingsFromParameters(const ros::NodeHandle& node)
 {
@@ -211,9 +219,7 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
   bool causal = true, recursive = false;
   readParameter(node, "causal", causal, "a boolean");
   readParameter(node, "recursive", recursive, "a boolean");
-  settings.window = recursive ? range_nlm::TemporalWindow::recursive
-                    : causal  ? range_nlm::TemporalWindow::causal
-                              : range_nlm::TemporalWindow::centred;
+  settings.window = windowOf(causal, recursive);
   try {
     settings.validate();
   } catch (const std::invalid_argument& e) {

@@ -298,9 +298,7 @@ applyReconfigure(const StreamSettings& current, const dynamic_reconfigure::Confi
     applyValue(settings, causal, recursive, p.name, double(p.value));
   for (const auto& p : request.strs)
     applyValue(settings, causal, recursive, p.name, std::string(p.value));
-  settings.window = recursive ? range_nlm::TemporalWindow::recursive
-                    : causal  ? range_nlm::TemporalWindow::causal
-                              : range_nlm::TemporalWindow::centred;
+  settings.window = windowOf(causal, recursive);
   try {
     settings.validate();
   } catch (const std::invalid_argument& e) {

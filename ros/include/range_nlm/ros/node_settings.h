@@ -23,6 +23,11 @@ namespace range_nlm_ros
 range_nlm::FilterParameters
 filterParametersFromParameters(const ros::NodeHandle& private_node);
 
+/// The temporal window the `causal` and `recursive` parameters name (recursive wins; neither:
+/// centred).
+range_nlm::TemporalWindow
+windowOf(bool causal, bool recursive);
+
 /// Reads StreamSettings from a node's private parameters (names as above). The live default is
 /// a causal window. Throws std::invalid_argument naming the parameter and the value on a wrong
 /// type or an invalid value.
