@@ -317,7 +317,6 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
   stage.start(Stage::pyramid);
   coarseCorrections(reduced[center], coarse.run.output, viewpoint, threads, workspace.pyramid_rho,
                     workspace.pyramid_correction);
-  rangesOf(input, viewpoint, threads, workspace.ranges);
   const CarrySource source{reduced[center].width, reduced[center].height, workspace.pyramid_rho,
                            workspace.pyramid_correction, workspace.pyramid_member, tolerance};
   carryCorrections(input, workspace.ranges, source, viewpoint, active, threads, workspace.carried);
