@@ -37,7 +37,7 @@
   X(kCorrelatedVarianceRatio, float, 0.5f, "generated",                                                               \
     "correlated noise: the variance at lag 1 below this share of that at lag R")                                      \
   X(kStrongNoiseFootprints, float, 3.25f, "real",                                                                     \
-    "strong noise (doubles the dilation): between the noisiest real frame and the gaining scenes")                    \
+    "strong noise (doubles the dilation, again per doubling): between the noisiest real frame and the gaining scenes") \
   X(kScaleSurfaceSigmas, float, 3.0f, "generated",                                                                    \
     "multiscale: points of a 2 x 2 block within this many noise sigmas lie on one surface")                           \
   X(kScaleSurfaceFootprints, float, 2.0f, "generated",                                                                \

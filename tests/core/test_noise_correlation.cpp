@@ -71,7 +71,7 @@ TEST(NoiseCorrelation, ScaleInFootprintsIsTheScaleOverTheDistanceBetweenRays)
   EXPECT_EQ(estimateNoiseCorrelation(Grid(64, 48)).scale_in_footprints[3], 0.0f);
 }
 
-TEST(NoiseCorrelation, StrongNoiseDoublesTheAutomaticDilation)
+TEST(NoiseCorrelation, EachDoublingOfStrongNoiseDoublesTheAutomaticDilation)
 {
   // Independent noise of about 1.7 pixel footprints at 1.5 m: contiguous windows; three times
   // as strong: dilation 2.
@@ -79,6 +79,11 @@ TEST(NoiseCorrelation, StrongNoiseDoublesTheAutomaticDilation)
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 1);
   iid.noise_scale = 3.0;
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 2);
+  // Each further doubling of the noise doubles it again, up to 4 at 640 columns.
+  iid.noise_scale = 6.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 4);
+  iid.noise_scale = 24.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 4);
   // Correlated noise: 2 at 640 columns, 4 when strong.
   SceneOptions stereo = planeScene("stereo", 640, 480);
   stereo.stereo_correlation_length = 6.0;

@@ -233,7 +233,9 @@ estimateNoiseCorrelation(const Grid& grid, int step = 4);
 ///   [2, 4]: 2 in a VGA frame, 4 at 1280 columns and more); else 1;
 /// - if the noise is strong, i.e. the scale at lag R / 2 exceeds 3.25 pixel footprints
 ///   (scale_in_footprints), that dilation is doubled: detail at the pixel scale does not survive
-///   such noise, and the dilated passes reach twice as far at the same cost.
+///   such noise, and the dilated passes reach twice as far at the same cost; it is doubled again
+///   for each further doubling of the noise (6.5, 13, ... footprints), up to 4 (or twice the
+///   correlated dilation, where that is more).
 /// The correlation test scales with the width because a frame's details span more pixels the
 /// more pixels it has: a dilated 3 x 3 patch must stay small against them, and at long lags a
 /// small frame's curvature and edges, not its noise, dominate the differences.

@@ -108,8 +108,14 @@ detail::automaticDilation(const Grid& frame, int threads)
                     ? std::clamp((tuned::kDilationPerWidth * frame.width + rounding) / width, tuned::kDilationMin,
                                  tuned::kDilationMax)
                     : 1;
-  // Strong noise: more than kStrongNoiseFootprints pixel footprints at half the reference lag.
-  return c.scale_in_footprints[lag / 2 - 1] > tuned::kStrongNoiseFootprints ? 2 * k : k;
+  // Strong noise: the dilation doubles for each doubling of the noise beyond kStrongNoiseFootprints
+  // pixel footprints at half the reference lag (the window's reach grows with the noise's height),
+  // the second and further doublings only up to kDilationMax (or the doubled correlated dilation).
+  const float footprints = c.scale_in_footprints[lag / 2 - 1];
+  int strong = 1;
+  for (float limit = tuned::kStrongNoiseFootprints; footprints > limit && strong < 1024; limit *= 2.0f)
+    strong *= 2;
+  return strong <= 2 ? strong * k : std::min(strong * k, std::max(tuned::kDilationMax, 2 * k));
 }
 
 int
