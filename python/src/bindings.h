@@ -68,6 +68,21 @@ resultOf(const Cloud& result, const FrameFormat& format);
 py::dict
 infoDict(const Stream::OutputInfo& info);
 
+/// `threads` (> 0) for every OpenMP region the calling thread starts while it exists, also those
+/// that do not take the parameter, as range_nlm_denoise --threads sets it; the count before is
+/// restored at its end.
+class ThreadCount
+{
+public:
+  explicit ThreadCount(int threads);
+  ~ThreadCount();
+  ThreadCount(const ThreadCount&) = delete;
+  ThreadCount& operator=(const ThreadCount&) = delete;
+
+private:
+  int before_ = 1;
+};
+
 /// The FilterParameters of a Parameters object, or of None (the recommended setting).
 FilterParameters
 parametersOf(const py::handle& parameters);

@@ -10,6 +10,10 @@
 #include <chrono>
 #include <memory>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace range_nlm
 {
 namespace python
@@ -52,11 +56,35 @@ staticStream(const FilterParameters& parameters, const Cloud& frame)
   return cached;
 }
 
+} // namespace
+
+ThreadCount::ThreadCount(int threads)
+{
+#ifdef _OPENMP
+  before_ = omp_get_max_threads();
+  if (threads > 0)
+    omp_set_num_threads(threads);
+#else
+  (void)threads;
+#endif
+}
+
+ThreadCount::~ThreadCount()
+{
+#ifdef _OPENMP
+  omp_set_num_threads(before_);
+#endif
+}
+
+namespace
+{
+
 /// Filters one frame (GIL released); returns the result and its record.
 std::pair<Cloud::Ptr, Stream::OutputInfo>
 filterFrame(const Cloud::Ptr& frame, const FilterParameters& parameters)
 {
   py::gil_scoped_release release;
+  const ThreadCount threads(parameters.threads);
   CachedStream& cached = staticStream(parameters, *frame);
   try {
     const std::vector<Stream::CloudPtr> out = cached.stream->push(frame);
@@ -111,6 +139,7 @@ public:
   LibraryTimer(const py::handle& points, const py::handle& parameters)
       : input_(cloudFromPoints(points, "points", Eigen::Vector4f::Zero()))
   {
+    threads_ = parametersOf(parameters).threads;
     filter_.setParameters(parametersOf(parameters));
     filter_.setInputCloud(input_);
   }
@@ -118,6 +147,7 @@ public:
   double run()
   {
     py::gil_scoped_release release;
+    const ThreadCount threads(threads_);
     const auto start = std::chrono::steady_clock::now();
     filter_.filter(output_);
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -126,6 +156,7 @@ public:
 
 private:
   Cloud::Ptr input_;
+  int threads_ = 0;
   Cloud output_;
   NonLocalMeansFilter<pcl::PointXYZ> filter_;
 };

@@ -35,7 +35,8 @@ class PythonStream
 public:
   PythonStream(int radius, const std::string& mode, const std::optional<DepthIntrinsics>& intrinsics,
                const py::handle& depth_scale, const std::string& output, const py::handle& parameters)
-      : stream_(radius, windowNamed(mode), parametersOf(parameters)), intrinsics_(intrinsics),
+      : stream_(radius, windowNamed(mode), parametersOf(parameters)), threads_(parametersOf(parameters).threads),
+        intrinsics_(intrinsics),
         depth_scale_(py::reinterpret_borrow<py::object>(depth_scale)), depth_output_(output == "depth")
   {
     if (output != "depth" && output != "points")
@@ -82,6 +83,7 @@ private:
     {
       py::gil_scoped_release release;
       std::lock_guard<std::mutex> lock(busy_);
+      const ThreadCount threads(threads_);
       if (!broken_.empty())
         throw std::runtime_error(broken_);
       const std::size_t held = stream_.heldFrames();
@@ -110,6 +112,7 @@ private:
   }
 
   Stream stream_;
+  int threads_;
   std::optional<DepthIntrinsics> intrinsics_;
   py::object depth_scale_;
   bool depth_output_;

@@ -16,8 +16,8 @@ TOOLS_DIR = os.environ.get("RANGE_NLM_TOOLS_DIR", "")
 SOURCE_DIR = os.environ.get("RANGE_NLM_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
 
 # Small windows, so that the command-line runs and the filter take milliseconds on 64 x 48 frames.
-SMALL = {"search_window": 5, "patch_size": 3, "normal_window": 5, "threads": 2}
-SMALL_CLI = ["--search-window", "5", "--patch", "3", "--normal-window", "5", "--threads", "2", "--quiet"]
+SMALL = {"search_window": 5, "patch_size": 3, "normal_window": 5, "threads": 1}
+SMALL_CLI = ["--search-window", "5", "--patch", "3", "--normal-window", "5", "--threads", "1", "--quiet"]
 
 
 def tool(name):
