@@ -35,6 +35,7 @@ from .interop import (
 __all__ = [
     "denoise",
     "denoise_depth",
+    "depth_to_points",
     "Stream",
     "Parameters",
     "Intrinsics",
@@ -85,6 +86,13 @@ def read_intrinsics(path):
     """Reads an intrinsics.txt file (``key value`` lines: fx, fy, cx, cy, depth_scale, width,
     height; docs/usage.md). Errors name the file and line (ValueError)."""
     return _range_nlm.read_intrinsics(str(path))
+
+
+def depth_to_points(depth, intrinsics=None, depth_scale=None):
+    """The H x W x 3 float32 points of a depth image (uint16 or float, as denoise_depth takes it),
+    back-projected as range_nlm_denoise reads a depth PNG; NaN where there is no measurement."""
+    intrinsics = Intrinsics() if intrinsics is None else _intrinsics(intrinsics)
+    return _range_nlm._depth_to_points(depth, intrinsics, depth_scale)
 
 
 def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **params):

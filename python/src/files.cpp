@@ -104,6 +104,16 @@ renderBeforeAfter(const py::handle& before, const py::handle& after, const std::
   return image.curvature_limit;
 }
 
+/// The points of a depth image, back-projected by the library (depthImageToCloud, depthMapToCloud).
+py::array
+depthToPoints(const py::handle& depth, const DepthIntrinsics& intrinsics, const py::handle& depth_scale)
+{
+  FrameFormat format;
+  const Cloud::Ptr cloud =
+      cloudFromDepth(depth, intrinsics, depthScaleOf(depth, intrinsics, depth_scale), false, format, "depth");
+  return pointsFromCloud(*cloud, 'f');
+}
+
 void
 bindIntrinsics(py::module_& m)
 {
@@ -137,6 +147,7 @@ bindIntrinsics(py::module_& m)
                ", depth_scale=" + py::repr(py::float_(in.depth_scale)).cast<std::string>() +
                ", width=" + std::to_string(in.width) + ", height=" + std::to_string(in.height) + ")";
       });
+  m.def("_depth_to_points", &depthToPoints, py::arg("depth"), py::arg("intrinsics"), py::arg("depth_scale"));
   m.def(
       "read_intrinsics", [](const std::string& path) { return readIntrinsics(path); }, py::arg("path"),
       "Reads an intrinsics.txt file (fx, fy, cx, cy, depth_scale, width, height; see docs/usage.md).");

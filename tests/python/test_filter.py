@@ -176,3 +176,15 @@ def test_no_memory_growth_over_a_thousand_calls():
     calls(1000)
     grown = _rss_kb() - before
     assert grown < 512, "RSS grew by %d kB over 1000 calls" % grown
+
+
+def test_depth_to_points_back_projects_as_the_library_reads_a_png(tmp_path):
+    depth = np.full((6, 8), 5000, np.uint16)
+    depth[2, 3] = 0
+    intrinsics = range_nlm.Intrinsics(fx=100, fy=100, cx=3.5, cy=2.5, depth_scale=5000)
+    points = range_nlm.depth_to_points(depth, intrinsics)
+    assert points.dtype == np.float32 and points.shape == (6, 8, 3)
+    assert np.isnan(points[2, 3]).all()
+    assert points[0, 0].tolist() == pytest.approx([-0.035, -0.025, 1.0])
+    metres = range_nlm.depth_to_points(depth.astype(np.float32) / 5000, intrinsics)
+    assert np.array_equal(bits(metres), bits(points))
