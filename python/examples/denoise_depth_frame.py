@@ -5,13 +5,14 @@
 
 Reads data/depth-images/tum-fr2-desk-pair/1_depth.png (Kinect v1, TUM RGB-D fr2/desk) and its
 intrinsics.txt, filters the depth image with the default setting, prints the bandwidths the filter
-chose, writes the filtered depth image next to the figure, and draws both frames side by side,
+chose, writes the filtered depth image to the temporary directory, and draws both frames side by side,
 flat-shaded on one scale (the renderer of range_nlm_render). With Open3D installed it also shows
 the round trip through an open3d.geometry.PointCloud, with the organized order kept.
 """
 
 import os
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -32,7 +33,9 @@ def main():
     print("filtered %d x %d in %.0f ms: d = %.4f m, s = %.4f m, %d outliers moved"
           % (depth.shape[1], depth.shape[0], 1000 * (time.perf_counter() - start), info["distance_bandwidth"],
              info["similarity_bandwidth"], info["outliers_moved"]))
-    range_nlm.write_depth_png(os.path.splitext(figure)[0] + "_depth.png", filtered)
+    depth_out = os.path.join(tempfile.gettempdir(), "1_depth_filtered.png")
+    range_nlm.write_depth_png(depth_out, filtered)  # what range_nlm_denoise 1_depth.png out.png writes
+    print("wrote", depth_out)
 
     # Both frames as points (the library's back-projection) for the renderer.
     before = range_nlm.depth_to_points(depth, intrinsics)
