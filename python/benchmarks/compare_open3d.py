@@ -8,7 +8,7 @@ Generated scenes (range_nlm_synth, 640 x 480): flat / feature RMSE in mm against
 as range_nlm_eval reports it. Real frames: the RMS residual in mm to the planar regions found in
 the raw frame, in their interior and in a 3 px band along their borders (range_nlm_eval --raw).
 Time: median of --repeats calls of each method in this process (the depth filters on the z image,
-range_nlm on the points), milliseconds.
+range_nlm on the points, with --threads threads, default 1), milliseconds.
 
 The image filters smooth the depth z of each pixel; the filtered point stays on its pixel's ray
 (p * z' / z), so every method is scored on the same organized points. Invalid pixels (NaN) are
@@ -141,8 +141,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--tools", default=os.path.join(ROOT, "build", "tools"), help="directory of the built tools")
     parser.add_argument("--repeats", type=int, default=3, help="timed calls per method and frame (median)")
+    parser.add_argument("--threads", type=int, default=1, help="range_nlm's threads (0 = all cores)")
     args = parser.parse_args()
-    methods = [("raw (unfiltered)", lambda p: p), ("range_nlm (default)", range_nlm.denoise)]
+    methods = [("raw (unfiltered)", lambda p: p),
+               ("range_nlm (default)", lambda p: range_nlm.denoise(p, threads=args.threads))]
     methods += [(name, on_rays(f)) for name, f in open3d_methods() + opencv_methods()]
     print("| frame | method | flat / feature RMSE (generated) or interior / border RMS (real), mm | time, ms |")
     print("|---|---|---|---|")

@@ -131,34 +131,46 @@ denoiseDepth(const py::handle& depth, const DepthIntrinsics& intrinsics, const p
   return py::make_tuple(resultOf(*result, format), infoDict(info));
 }
 
-/// The C++ library's own filter() call on a frame held in C++, for measuring what calling from
-/// Python costs: run() times one NonLocalMeansFilter::filter() (GIL released), nothing else.
+/// The C++ library's own calls on a frame held in C++, for measuring what calling from Python
+/// costs: run() times one NonLocalMeansFilter::filter() (`path` "filter", as a C++ program calls
+/// the library) or one TemporalStream::push() of radius 0 ("stream", the call denoise() makes),
+/// with the GIL released, and nothing else.
 class LibraryTimer
 {
 public:
-  LibraryTimer(const py::handle& points, const py::handle& parameters)
-      : input_(cloudFromPoints(points, "points", Eigen::Vector4f::Zero()))
+  LibraryTimer(const py::handle& points, const py::handle& parameters, const std::string& path)
+      : input_(cloudFromPoints(points, "points", Eigen::Vector4f::Zero())), parameters_(parametersOf(parameters)),
+        stream_path_(path == "stream")
   {
-    threads_ = parametersOf(parameters).threads;
-    filter_.setParameters(parametersOf(parameters));
+    if (path != "filter" && path != "stream")
+      throw py::value_error("range_nlm: path must be 'filter' or 'stream', got '" + path + "'");
+    filter_.setParameters(parameters_);
     filter_.setInputCloud(input_);
+    stream_ = std::make_unique<Stream>(0, TemporalWindow::centred, parameters_);
   }
-  /// Milliseconds of one filter() call.
+  /// Milliseconds of one call.
   double run()
   {
     py::gil_scoped_release release;
-    const ThreadCount threads(threads_);
+    const ThreadCount threads(parameters_.threads);
     const auto start = std::chrono::steady_clock::now();
-    filter_.filter(output_);
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (stream_path_)
+      stream_output_ = stream_->push(input_).front();
+    else
+      filter_.filter(output_);
+    const auto stop = std::chrono::steady_clock::now();
+    return std::chrono::duration<double, std::milli>(stop - start).count();
   }
-  py::array output() const { return pointsFromCloud(output_, 'f'); }
+  py::array output() const { return pointsFromCloud(stream_path_ ? *stream_output_ : output_, 'f'); }
 
 private:
   Cloud::Ptr input_;
-  int threads_ = 0;
+  FilterParameters parameters_;
+  bool stream_path_;
   Cloud output_;
+  Stream::CloudPtr stream_output_;
   NonLocalMeansFilter<pcl::PointXYZ> filter_;
+  std::unique_ptr<Stream> stream_;
 };
 
 } // namespace
@@ -179,7 +191,8 @@ bindFilter(py::module_& m)
   m.def("_denoise_depth", &denoiseDepth, py::arg("depth"), py::arg("intrinsics"), py::arg("depth_scale"),
         py::arg("output"), py::arg("parameters"));
   py::class_<LibraryTimer>(m, "_LibraryTimer")
-      .def(py::init<const py::handle&, const py::handle&>(), py::arg("points"), py::arg("parameters"))
+      .def(py::init<const py::handle&, const py::handle&, const std::string&>(), py::arg("points"),
+           py::arg("parameters"), py::arg("path") = "filter")
       .def("run", &LibraryTimer::run)
       .def("output", &LibraryTimer::output);
 }
