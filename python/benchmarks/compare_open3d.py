@@ -31,33 +31,54 @@ import range_nlm
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 
 
+def _works(call):
+    """Whether an Open3D filter runs on this build (Debian's Open3D is built without IPP, and
+    its tensor image filters then raise 'not implemented' on the CPU)."""
+    try:
+        call(np.ones((8, 8), np.float32))
+        return True
+    except RuntimeError:
+        return False
+
+
 def open3d_methods():
-    """(name, function of the z image in metres -> filtered z) for Open3D's filters."""
+    """(name, function of the z image in metres -> filtered z) for the Open3D filters that run
+    on this build."""
     try:
         import open3d as o3d
     except ImportError:
         print("note: Open3D is not installed (python3-open3d); its filters are left out", file=sys.stderr)
         return []
 
-    def bilateral(kernel, value_sigma, dist_sigma):
+    def tensor_filter(name, *args):
         def run(z):
             image = o3d.t.geometry.Image(o3d.core.Tensor(z))
-            return image.filter_bilateral(kernel, value_sigma, dist_sigma).as_tensor().numpy()[:, :, 0]
+            return getattr(image, name)(*args).as_tensor().numpy()[:, :, 0]
         return run
 
-    def gaussian(kernel, sigma):
+    def legacy_gaussian(kind):
+        # Normalized convolution: the holes (0) are left out of the weighted mean, not averaged in
+        # as zero depth.
         def run(z):
-            image = o3d.t.geometry.Image(o3d.core.Tensor(z))
-            return image.filter_gaussian(kernel, sigma).as_tensor().numpy()[:, :, 0]
+            valid = (z > 0).astype(np.float32)
+            num = np.asarray(o3d.geometry.Image(z).filter(kind))
+            den = np.asarray(o3d.geometry.Image(valid).filter(kind))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                return np.where(valid > 0, num / den, 0.0).astype(np.float32)
         return run
 
     methods = []
-    if hasattr(o3d.t.geometry.Image, "filter_bilateral"):
-        methods += [("open3d bilateral 5 px, 10 mm", bilateral(5, 0.010, 2.0)),
-                    ("open3d bilateral 7 px, 30 mm", bilateral(7, 0.030, 3.0))]
-    else:
-        print("note: this Open3D has no t.geometry.Image.filter_bilateral", file=sys.stderr)
-    methods.append(("open3d gaussian 5 px", gaussian(5, 1.0)))
+    candidates = [("open3d t.Image.filter_bilateral 5 px, 10 mm", tensor_filter("filter_bilateral", 5, 0.010, 2.0)),
+                  ("open3d t.Image.filter_bilateral 7 px, 30 mm", tensor_filter("filter_bilateral", 7, 0.030, 3.0)),
+                  ("open3d t.Image.filter_gaussian 5 px", tensor_filter("filter_gaussian", 5, 1.0))]
+    for name, run in candidates:
+        if _works(run):
+            methods.append((name, run))
+        else:
+            print("note: %s is not implemented on the CPU in this Open3D %s build; left out"
+                  % (name.split(" ")[1], o3d.__version__), file=sys.stderr)
+    methods += [("open3d Image.filter Gaussian5 (normalized)", legacy_gaussian(o3d.geometry.ImageFilterType.Gaussian5)),
+                ("open3d Image.filter Gaussian7 (normalized)", legacy_gaussian(o3d.geometry.ImageFilterType.Gaussian7))]
     return methods
 
 
