@@ -12,6 +12,8 @@ name with ``_`` for ``-`` works too: ``patch``, ``patch_gate``, ``cross_frame``)
 range_nlm_denoise's. See docs/python.md.
 """
 
+import operator
+
 from . import _range_nlm
 from ._range_nlm import (
     InputError,
@@ -153,8 +155,9 @@ class Stream:
 
     def __init__(self, radius=1, mode="centred", parameters=None, *, intrinsics=None, depth_scale=None,
                  output="depth", **params):
-        if isinstance(radius, bool) or not isinstance(radius, int):
+        if isinstance(radius, bool) or not hasattr(radius, "__index__"):
             raise TypeError("range_nlm: radius must be an integer, got %r" % (radius,))
+        radius = operator.index(radius)
         if radius < 0:
             raise ValueError("range_nlm: radius must be >= 0, got %d" % radius)
         self.radius = radius
