@@ -141,7 +141,9 @@ cloudFromDepth(const py::handle& depth, const DepthIntrinsics& intrinsics, doubl
     image.height = height;
     image.values.resize(count);
     std::memcpy(image.values.data(), a.data(), count * sizeof(std::uint16_t));
-    return Cloud::Ptr(new Cloud(depthImageToCloud(image, scaled)));
+    const Cloud::Ptr cloud(new Cloud(depthImageToCloud(image, scaled)));
+    format.input = cloud;
+    return cloud;
   }
   std::vector<float> values(count);
   bool nan_marks_invalid = false;
@@ -151,7 +153,9 @@ cloudFromDepth(const py::handle& depth, const DepthIntrinsics& intrinsics, doubl
     nan_marks_invalid = nan_marks_invalid || std::isnan(values[i]);
   }
   format.invalid_value = nan_marks_invalid ? std::numeric_limits<float>::quiet_NaN() : 0.0f;
-  return Cloud::Ptr(new Cloud(depthMapToCloud(values, width, height, scaled)));
+  const Cloud::Ptr cloud(new Cloud(depthMapToCloud(values, width, height, scaled)));
+  format.input = cloud;
+  return cloud;
 }
 
 py::object

@@ -38,6 +38,9 @@ struct FrameFormat
   /// Float depth images: the value of pixels without measurement in the input (0 or NaN), kept
   /// in the output.
   float invalid_value = 0.0f;
+  /// Depth images: the frame's points as they came in, for the depth encoding (which may take
+  /// the input and the filtered points, as range_nlm_denoise's PNG output does).
+  Cloud::ConstPtr input;
 };
 
 /// The organized cloud of an H x W x 3 float32 / float64 array (read in place, no copy on the
