@@ -17,7 +17,10 @@ packages=(cmake g++ make libpcl-dev pcl-tools libeigen3-dev libflann-dev libboos
           # rosnode, rosparam, dynparam) and the camera-rate benchmark
           python3-roslaunch rosbash python3-rostopic python3-rosbag python3-rospy python3-rosnode
           python3-rosparam python3-dynamic-reconfigure python3-diagnostic-msgs python3-sensor-msgs
-          image-transport-tools)
+          image-transport-tools
+          # the Python module (python/, docs/python.md) and its tests: pybind11, Python's headers,
+          # numpy, Open3D (interop tests and the comparison script), pytest, setuptools (pip install .)
+          python3-dev python3-pybind11 python3-numpy python3-open3d python3-pytest python3-setuptools)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -454,33 +454,36 @@ writeDepthPng(const std::string& path, const DepthImage& image)
   detail::writePng(path, pixels);
 }
 
+namespace
+{
+
+/// Back-projects width x height depth values (`value / depth_scale` metres; 0, negative or
+/// non-finite: no measurement) with `intrinsics`: the one place 16-bit images and floating-point
+/// depth maps become clouds.
+template <typename Value>
 pcl::PointCloud<pcl::PointXYZ>
-depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics)
+backProject(const Value* values, std::size_t count, int width, int height, const DepthIntrinsics& intrinsics)
 {
   intrinsics.validate();
-  if (image.width <= 0 || image.height <= 0 ||
-      image.values.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height))
-    throw std::invalid_argument("depth image: " + std::to_string(image.width) + " x " +
-                                std::to_string(image.height) + " with " + std::to_string(image.values.size()) +
-                                " values is empty or inconsistent");
-  if ((intrinsics.width > 0 && intrinsics.width != image.width) ||
-      (intrinsics.height > 0 && intrinsics.height != image.height))
-    throw std::invalid_argument("image is " + std::to_string(image.width) + " x " + std::to_string(image.height) +
+  if (width <= 0 || height <= 0 || count != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+    throw std::invalid_argument("depth image: " + std::to_string(width) + " x " + std::to_string(height) + " with " +
+                                std::to_string(count) + " values is empty or inconsistent");
+  if ((intrinsics.width > 0 && intrinsics.width != width) || (intrinsics.height > 0 && intrinsics.height != height))
+    throw std::invalid_argument("image is " + std::to_string(width) + " x " + std::to_string(height) +
                                 " pixels but the intrinsics" +
                                 (intrinsics.source.empty() ? std::string() : " in " + quoted(intrinsics.source)) +
                                 " are for " + std::to_string(intrinsics.width) + " x " +
                                 std::to_string(intrinsics.height) +
                                 " (give the intrinsics of this camera and resolution)");
-  pcl::PointCloud<pcl::PointXYZ> cloud(static_cast<std::uint32_t>(image.width),
-                                       static_cast<std::uint32_t>(image.height));
+  pcl::PointCloud<pcl::PointXYZ> cloud(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   bool dense = true;
-  for (int v = 0; v < image.height; ++v)
-    for (int u = 0; u < image.width; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * image.width + u;
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * width + u;
       pcl::PointXYZ& p = cloud[i];
-      const std::uint16_t value = image.values[i];
-      if (value == 0) {
+      const Value value = values[i];
+      if (!(value > 0) || !std::isfinite(static_cast<double>(value))) {
         p.x = p.y = p.z = nan;
         dense = false;
         continue;
@@ -494,8 +497,22 @@ depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics)
   return cloud;
 }
 
-DepthImage
-cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale, DepthClamping* clamping)
+} // namespace
+
+pcl::PointCloud<pcl::PointXYZ>
+depthImageToCloud(const DepthImage& image, const DepthIntrinsics& intrinsics)
+{
+  return backProject(image.values.data(), image.values.size(), image.width, image.height, intrinsics);
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+depthMapToCloud(const std::vector<float>& values, int width, int height, const DepthIntrinsics& intrinsics)
+{
+  return backProject(values.data(), values.size(), width, height, intrinsics);
+}
+
+std::vector<double>
+cloudToDepthValues(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale)
 {
   if (!(std::isfinite(depth_scale) && depth_scale > 0.0))
     throw std::invalid_argument("depth_scale must be a positive number, got " + numberText(depth_scale));
@@ -503,15 +520,27 @@ cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scal
     throw std::invalid_argument("cannot encode a " + std::to_string(cloud.width) + " x " +
                                 std::to_string(cloud.height) + " cloud of " + std::to_string(cloud.size()) +
                                 " points as a depth image (empty or not organized)");
+  std::vector<double> values(cloud.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const pcl::PointXYZ& p = cloud[i];
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+      values[i] = static_cast<double>(p.z) * depth_scale;
+  }
+  return values;
+}
+
+DepthImage
+cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale, DepthClamping* clamping)
+{
+  const std::vector<double> depths = cloudToDepthValues(cloud, depth_scale);
   DepthImage image;
   image.width = static_cast<int>(cloud.width);
   image.height = static_cast<int>(cloud.height);
   image.values.assign(cloud.size(), 0);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const pcl::PointXYZ& p = cloud[i];
-    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+    if (std::isnan(depths[i]))
       continue;
-    const double value = std::round(static_cast<double>(p.z) * depth_scale);
+    const double value = std::round(depths[i]);
     if (clamping != nullptr && value > 65535.0) {
       image.values[i] = 65535;
       ++clamping->above;
@@ -524,7 +553,7 @@ cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scal
     }
     if (!(value >= 1.0 && value <= 65535.0))
       throw std::invalid_argument(
-          "depth " + numberText(p.z) + " m at pixel (" + std::to_string(i % cloud.width) + ", " +
+          "depth " + numberText(cloud[i].z) + " m at pixel (" + std::to_string(i % cloud.width) + ", " +
           std::to_string(i / cloud.width) + ") does not fit a 16-bit depth image with depth_scale " +
           numberText(depth_scale) + " (representable: " + numberText(0.5 / depth_scale) + " to " +
           numberText(65535.0 / depth_scale) + " m); choose a smaller depth scale");

@@ -327,6 +327,52 @@ TEST(DepthImageToCloud, RejectsBadInput)
   expectInvalid([&] { depthImageToCloud(image, bad); }, {"fx"});
 }
 
+TEST(DepthMapToCloud, BackProjectsFloatDepthsAsTheUint16ImageIs)
+{
+  DepthImage image;
+  image.width = 3;
+  image.height = 2;
+  image.values = {1000, 0, 2000, 1500, 1500, 65535};
+  DepthIntrinsics intrinsics;
+  intrinsics.fx = 100.0;
+  intrinsics.fy = 200.0;
+  intrinsics.cx = 1.0;
+  intrinsics.cy = 0.5;
+  intrinsics.depth_scale = 1000.0;
+  const auto expected = depthImageToCloud(image, intrinsics);
+  const std::vector<float> values(image.values.begin(), image.values.end());
+  const auto cloud = depthMapToCloud(values, 3, 2, intrinsics);
+  ASSERT_EQ(cloud.size(), expected.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const float a = cloud[i].data[k], b = expected[i].data[k];
+      EXPECT_TRUE((std::isnan(a) && std::isnan(b)) || a == b) << "point " << i << " coordinate " << k;
+    }
+  // A negative or non-finite value is no measurement either.
+  const auto holes = depthMapToCloud({-1.0f, std::nanf(""), INFINITY, 1.0f}, 2, 2, intrinsics);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_TRUE(std::isnan(holes[i].x) && std::isnan(holes[i].y) && std::isnan(holes[i].z)) << i;
+  EXPECT_FLOAT_EQ(holes[3].z, 0.001f);
+  EXPECT_FALSE(holes.is_dense);
+  expectInvalid([&] { depthMapToCloud({1.0f, 2.0f, 3.0f}, 2, 2, intrinsics); }, {"2 x 2"});
+}
+
+TEST(CloudToDepthValues, AreTheDepthsTheImageRounds)
+{
+  pcl::PointCloud<pcl::PointXYZ> cloud(3, 1);
+  cloud[0] = pcl::PointXYZ(0.1f, 0.2f, 1.23456f);
+  cloud[1] = pcl::PointXYZ(NAN, 0.0f, 1.0f); // invalid in any coordinate: NaN
+  cloud[2] = pcl::PointXYZ(0.0f, 0.0f, 2.0f);
+  const std::vector<double> values = cloudToDepthValues(cloud, 5000.0);
+  ASSERT_EQ(values.size(), 3u);
+  EXPECT_DOUBLE_EQ(values[0], double(1.23456f) * 5000.0);
+  EXPECT_TRUE(std::isnan(values[1]));
+  EXPECT_DOUBLE_EQ(values[2], 10000.0);
+  const DepthImage image = cloudToDepthImage(cloud, 5000.0);
+  EXPECT_EQ(image.values, (std::vector<std::uint16_t>{static_cast<std::uint16_t>(std::round(values[0])), 0, 10000}));
+  expectInvalid([&] { cloudToDepthValues(cloud, -1.0); }, {"depth_scale"});
+}
+
 TEST(CloudToDepthImage, EveryUint16ValueSurvivesTheRoundTrip)
 {
   DepthImage all;

@@ -121,6 +121,21 @@ DepthImage
 cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale,
                   DepthClamping* clamping = nullptr);
 
+/// A floating-point depth map (e.g. a float32 image in metres, as Open3D and numpy hold them)
+/// back-projected exactly as depthImageToCloud back-projects a 16-bit image: `values[v * width +
+/// u] / depth_scale` is the depth z in metres; 0, a negative or a non-finite value marks a pixel
+/// without measurement (NaN in x, y and z). Throws std::invalid_argument as depthImageToCloud does,
+/// and if `values` does not hold width x height values.
+pcl::PointCloud<pcl::PointXYZ>
+depthMapToCloud(const std::vector<float>& values, int width, int height, const DepthIntrinsics& intrinsics);
+
+/// The depths a depth image stores for an organized cloud, before any encoding: z * depth_scale
+/// per point, NaN where the point is invalid. cloudToDepthImage rounds exactly these values into
+/// 16 bits; a floating-point depth map takes them as they are. Throws std::invalid_argument as
+/// cloudToDepthImage does for the scale and the cloud's size.
+std::vector<double>
+cloudToDepthValues(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale);
+
 /// readDepthPng + depthImageToCloud; errors name the file.
 pcl::PointCloud<pcl::PointXYZ>
 loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics,

@@ -1,0 +1,205 @@
+// numpy frames <-> the library's organized clouds. Depth images go through the library's own
+// conversions (depthImageToCloud, cloudToDepthImage, ...), the ones range_nlm_denoise uses.
+#include "bindings.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+namespace range_nlm
+{
+namespace python
+{
+namespace
+{
+
+std::string
+typeName(const py::handle& value)
+{
+  return py::str(value.get_type().attr("__name__")).cast<std::string>();
+}
+
+std::string
+shapeText(const py::array& a)
+{
+  std::string text = "(";
+  for (py::ssize_t k = 0; k < a.ndim(); ++k)
+    text += (k ? ", " : "") + std::to_string(a.shape(k));
+  return text + (a.ndim() == 1 ? ",)" : ")");
+}
+
+/// The array `value`, checked: a numpy array of `ndim` dimensions (the last of size `last` if
+/// `last` > 0), not empty, C-contiguous, of one of `types` (numpy type characters).
+py::array
+checkedArray(const py::handle& value, const char* what, int ndim, py::ssize_t last, const char* layout,
+             const std::string& types, const char* type_names)
+{
+  if (!py::isinstance<py::array>(value))
+    throw py::type_error("range_nlm: " + std::string(what) + " must be a numpy array (" + layout + "), got " +
+                         typeName(value));
+  py::array a = py::reinterpret_borrow<py::array>(value);
+  if (a.ndim() != ndim || (last > 0 && a.shape(ndim - 1) != last) || a.size() == 0)
+    throw py::value_error("range_nlm: " + std::string(what) + " must be " + layout + ", got shape " + shapeText(a));
+  const char type = a.dtype().char_();
+  const bool native = a.dtype().attr("isnative").cast<bool>();
+  if (types.find(type) == std::string::npos || !native)
+    throw py::type_error("range_nlm: " + std::string(what) + " must be " + type_names + ", got " +
+                         py::str(a.dtype()).cast<std::string>() + (native ? "" : " (non-native byte order)"));
+  if (!(a.flags() & py::array::c_style) || !(a.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_))
+    throw py::value_error("range_nlm: " + std::string(what) +
+                          " must be a C-contiguous array (got a strided or unaligned view); pass "
+                          "numpy.ascontiguousarray(...)");
+  return a;
+}
+
+template <typename Scalar>
+void
+copyPoints(const Scalar* data, Cloud& cloud)
+{
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    pcl::PointXYZ& p = cloud[i];
+    p.x = static_cast<float>(data[3 * i]);
+    p.y = static_cast<float>(data[3 * i + 1]);
+    p.z = static_cast<float>(data[3 * i + 2]);
+  }
+}
+
+template <typename Scalar>
+py::array
+pointsArray(const Cloud& cloud)
+{
+  py::array_t<Scalar> out({static_cast<py::ssize_t>(cloud.height), static_cast<py::ssize_t>(cloud.width),
+                           py::ssize_t(3)});
+  Scalar* data = out.mutable_data();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    data[3 * i] = cloud[i].x;
+    data[3 * i + 1] = cloud[i].y;
+    data[3 * i + 2] = cloud[i].z;
+  }
+  return std::move(out);
+}
+
+/// Warns (RuntimeWarning) as range_nlm_denoise does when filtering moved depths out of 16 bits.
+void
+warnClamping(const DepthClamping& clamping, double depth_scale)
+{
+  if (clamping.above == 0 && clamping.below == 0)
+    return;
+  std::ostringstream warning;
+  warning << "range_nlm: ";
+  if (clamping.above > 0)
+    warning << clamping.above << " pixel(s) filtered to more than " << 65535.0 / depth_scale
+            << " m (65535 / depth scale " << depth_scale << ") stored as 65535";
+  if (clamping.above > 0 && clamping.below > 0)
+    warning << "; ";
+  if (clamping.below > 0)
+    warning << clamping.below << " pixel(s) filtered to less than " << 0.5 / depth_scale << " m stored as 1";
+  if (PyErr_WarnEx(PyExc_RuntimeWarning, warning.str().c_str(), 1) != 0)
+    throw py::error_already_set();
+}
+
+} // namespace
+
+Cloud::Ptr
+cloudFromPoints(const py::handle& points, const char* what, const Eigen::Vector4f& viewpoint)
+{
+  const py::array a = checkedArray(points, what, 3, 3, "an organized H x W x 3 array of points (NaN = invalid)",
+                                   "fd", "float32 or float64");
+  Cloud::Ptr cloud(new Cloud(static_cast<std::uint32_t>(a.shape(1)), static_cast<std::uint32_t>(a.shape(0))));
+  if (a.dtype().char_() == 'f')
+    copyPoints(static_cast<const float*>(a.data()), *cloud);
+  else
+    copyPoints(static_cast<const double*>(a.data()), *cloud);
+  cloud->sensor_origin_ = viewpoint;
+  cloud->is_dense = false;
+  return cloud;
+}
+
+py::array
+pointsFromCloud(const Cloud& cloud, char type)
+{
+  return type == 'd' ? pointsArray<double>(cloud) : pointsArray<float>(cloud);
+}
+
+Cloud::Ptr
+cloudFromDepth(const py::handle& depth, const DepthIntrinsics& intrinsics, double depth_scale, bool depth_output,
+               FrameFormat& format, const char* what)
+{
+  const py::array a = checkedArray(depth, what, 2, 0, "an H x W depth image", "Hfd", "uint16, float32 or float64");
+  DepthIntrinsics scaled = intrinsics;
+  scaled.depth_scale = depth_scale;
+  format.depth = true;
+  format.type = a.dtype().char_();
+  format.depth_scale = depth_scale;
+  format.depth_output = depth_output;
+  const int height = static_cast<int>(a.shape(0)), width = static_cast<int>(a.shape(1));
+  const std::size_t count = static_cast<std::size_t>(a.size());
+  if (format.type == 'H') {
+    DepthImage image;
+    image.width = width;
+    image.height = height;
+    image.values.resize(count);
+    std::memcpy(image.values.data(), a.data(), count * sizeof(std::uint16_t));
+    const Cloud::Ptr cloud(new Cloud(depthImageToCloud(image, scaled)));
+    format.input = cloud;
+    return cloud;
+  }
+  std::vector<float> values(count);
+  bool nan_marks_invalid = false;
+  for (std::size_t i = 0; i < count; ++i) {
+    values[i] = format.type == 'f' ? static_cast<const float*>(a.data())[i]
+                                   : static_cast<float>(static_cast<const double*>(a.data())[i]);
+    nan_marks_invalid = nan_marks_invalid || std::isnan(values[i]);
+  }
+  format.invalid_value = nan_marks_invalid ? std::numeric_limits<float>::quiet_NaN() : 0.0f;
+  const Cloud::Ptr cloud(new Cloud(depthMapToCloud(values, width, height, scaled)));
+  format.input = cloud;
+  return cloud;
+}
+
+py::object
+resultOf(const Cloud& result, const FrameFormat& format)
+{
+  if (!format.depth)
+    return pointsFromCloud(result, format.type);
+  if (!format.depth_output)
+    return pointsFromCloud(result, 'f');
+  const py::ssize_t height = result.height, width = result.width;
+  if (format.type == 'H') {
+    // A depth image's input always fitted 16 bits, so a depth filtering moved just past them is
+    // clamped with a warning, as range_nlm_denoise's PNG output does.
+    DepthClamping clamping;
+    const DepthImage image = cloudToDepthImage(result, format.depth_scale, &clamping);
+    warnClamping(clamping, format.depth_scale);
+    py::array_t<std::uint16_t> out({height, width});
+    std::memcpy(out.mutable_data(), image.values.data(), image.values.size() * sizeof(std::uint16_t));
+    return std::move(out);
+  }
+  const std::vector<double> depths = cloudToDepthValues(result, format.depth_scale);
+  auto fill = [&](auto out) {
+    auto* data = out.mutable_data();
+    for (std::size_t i = 0; i < depths.size(); ++i)
+      data[i] = std::isnan(depths[i]) ? format.invalid_value : depths[i];
+    return py::object(std::move(out));
+  };
+  return format.type == 'f' ? fill(py::array_t<float>({height, width})) : fill(py::array_t<double>({height, width}));
+}
+
+py::dict
+infoDict(const Stream::OutputInfo& info)
+{
+  py::dict d;
+  d["filtered"] = info.problem.empty();
+  d["reason"] = info.problem.empty() ? py::object(py::none()) : py::object(py::str(info.problem));
+  d["distance_bandwidth"] = info.bandwidths.distance;
+  d["similarity_bandwidth"] = info.bandwidths.similarity;
+  d["mu_d"] = info.bandwidths.mu_d;
+  d["sigma_s"] = info.bandwidths.sigma_s;
+  d["outliers_moved"] = info.outliers_moved;
+  d["ms"] = info.milliseconds;
+  return d;
+}
+
+} // namespace python
+} // namespace range_nlm

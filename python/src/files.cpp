@@ -1,0 +1,179 @@
+// Files and pictures through range_nlm::io and range_nlm::eval: PCD frames, 16-bit depth PNGs,
+// intrinsics files and renders, with the tools' checked errors (each names the file).
+#include "bindings.h"
+
+#include <range_nlm/eval/render.h>
+#include <range_nlm/io/pcd_file.h>
+
+#include <pybind11/stl.h>
+
+#include <cstring>
+
+namespace range_nlm
+{
+namespace python
+{
+namespace
+{
+
+py::object
+readPcd(const std::string& path, bool return_viewpoint)
+{
+  io::LoadedCloud loaded;
+  Cloud cloud;
+  {
+    py::gil_scoped_release release;
+    loaded = io::loadCloud(path);
+    cloud = io::xyzFromBlob(loaded, path);
+  }
+  py::array points = pointsFromCloud(cloud, 'f');
+  if (!return_viewpoint)
+    return std::move(points);
+  return py::make_tuple(points, py::make_tuple(loaded.origin[0], loaded.origin[1], loaded.origin[2]));
+}
+
+void
+writePcd(const std::string& path, const py::handle& points, const std::vector<float>& viewpoint)
+{
+  if (viewpoint.size() != 3)
+    throw py::value_error("range_nlm: viewpoint must be (x, y, z), got " + std::to_string(viewpoint.size()) +
+                          " values");
+  const Cloud::Ptr cloud = cloudFromPoints(points, "points", {viewpoint[0], viewpoint[1], viewpoint[2], 0.0f});
+  py::gil_scoped_release release;
+  io::saveCloudAtomic(path, *cloud);
+}
+
+py::array
+readDepth(const std::string& path)
+{
+  DepthImage image;
+  {
+    py::gil_scoped_release release;
+    image = readDepthPng(path);
+  }
+  py::array_t<std::uint16_t> out({py::ssize_t(image.height), py::ssize_t(image.width)});
+  std::memcpy(out.mutable_data(), image.values.data(), image.values.size() * sizeof(std::uint16_t));
+  return std::move(out);
+}
+
+void
+writeDepth(const std::string& path, const py::handle& depth)
+{
+  if (!py::isinstance<py::array_t<std::uint16_t>>(depth) ||
+      py::reinterpret_borrow<py::array>(depth).dtype().char_() != 'H' ||
+      py::reinterpret_borrow<py::array>(depth).ndim() != 2)
+    throw py::type_error("range_nlm: a depth PNG is written from an H x W uint16 array, got " +
+                         py::repr(depth.get_type()).cast<std::string>());
+  const auto a = py::reinterpret_borrow<py::array_t<std::uint16_t>>(depth);
+  DepthImage image;
+  image.height = static_cast<int>(a.shape(0));
+  image.width = static_cast<int>(a.shape(1));
+  image.values.resize(static_cast<std::size_t>(a.size()));
+  for (py::ssize_t v = 0; v < a.shape(0); ++v) // any strides
+    for (py::ssize_t u = 0; u < a.shape(1); ++u)
+      image.values[static_cast<std::size_t>(v * a.shape(1) + u)] = a.at(v, u);
+  py::gil_scoped_release release;
+  writeDepthPng(path, image);
+}
+
+RenderMode
+modeNamed(const std::string& mode)
+{
+  if (mode == "shaded")
+    return RenderMode::shaded;
+  if (mode == "curvature")
+    return RenderMode::curvature;
+  throw py::value_error("range_nlm: mode must be 'shaded' or 'curvature', got '" + mode + "'");
+}
+
+/// Writes `before` and `after` side by side on one scale (range_nlm_render --before --after);
+/// returns the curvature scale used (0 in shaded mode).
+float
+renderBeforeAfter(const py::handle& before, const py::handle& after, const std::string& path,
+                  const std::string& mode, float curvature_limit)
+{
+  RenderParameters parameters;
+  parameters.curvature_limit = curvature_limit;
+  const Cloud::Ptr a = cloudFromPoints(before, "before", Eigen::Vector4f::Zero());
+  const Cloud::Ptr b = cloudFromPoints(after, "after", Eigen::Vector4f::Zero());
+  const RenderMode render_mode = modeNamed(mode);
+  py::gil_scoped_release release;
+  const BeforeAfterImage image =
+      range_nlm::renderBeforeAfter(gridFromCloud(*a), gridFromCloud(*b), render_mode, parameters);
+  saveRgbPng(path, image.image);
+  return image.curvature_limit;
+}
+
+/// The points of a depth image, back-projected by the library (depthImageToCloud, depthMapToCloud).
+py::array
+depthToPoints(const py::handle& depth, const DepthIntrinsics& intrinsics, const py::handle& depth_scale)
+{
+  FrameFormat format;
+  const Cloud::Ptr cloud =
+      cloudFromDepth(depth, intrinsics, depthScaleOf(depth, intrinsics, depth_scale), false, format, "depth");
+  return pointsFromCloud(*cloud, 'f');
+}
+
+void
+bindIntrinsics(py::module_& m)
+{
+  py::class_<DepthIntrinsics>(m, "Intrinsics",
+                              "Pinhole intrinsics of a depth camera (pixels) and its depth scale (stored values per "
+                              "metre), as range_nlm_denoise --fx ... --depth-scale / --intrinsics take them.")
+      .def(py::init([](double fx, double fy, double cx, double cy, double depth_scale, int width, int height) {
+             DepthIntrinsics in;
+             in.fx = fx, in.fy = fy, in.cx = cx, in.cy = cy, in.depth_scale = depth_scale;
+             in.width = width, in.height = height;
+             in.validate();
+             return in;
+           }),
+           py::arg("fx") = DepthIntrinsics().fx, py::arg("fy") = DepthIntrinsics().fy,
+           py::arg("cx") = DepthIntrinsics().cx, py::arg("cy") = DepthIntrinsics().cy,
+           py::arg("depth_scale") = DepthIntrinsics().depth_scale, py::arg("width") = 0, py::arg("height") = 0)
+      .def_readwrite("fx", &DepthIntrinsics::fx)
+      .def_readwrite("fy", &DepthIntrinsics::fy)
+      .def_readwrite("cx", &DepthIntrinsics::cx)
+      .def_readwrite("cy", &DepthIntrinsics::cy)
+      .def_readwrite("depth_scale", &DepthIntrinsics::depth_scale)
+      .def_readwrite("width", &DepthIntrinsics::width)
+      .def_readwrite("height", &DepthIntrinsics::height)
+      .def_readonly("source", &DepthIntrinsics::source)
+      .def("validate", &DepthIntrinsics::validate)
+      .def("__repr__", [](const DepthIntrinsics& in) {
+        return "range_nlm.Intrinsics(fx=" + py::repr(py::float_(in.fx)).cast<std::string>() +
+               ", fy=" + py::repr(py::float_(in.fy)).cast<std::string>() +
+               ", cx=" + py::repr(py::float_(in.cx)).cast<std::string>() +
+               ", cy=" + py::repr(py::float_(in.cy)).cast<std::string>() +
+               ", depth_scale=" + py::repr(py::float_(in.depth_scale)).cast<std::string>() +
+               ", width=" + std::to_string(in.width) + ", height=" + std::to_string(in.height) + ")";
+      });
+  m.def("_depth_to_points", &depthToPoints, py::arg("depth"), py::arg("intrinsics"), py::arg("depth_scale"));
+  m.def(
+      "read_intrinsics", [](const std::string& path) { return readIntrinsics(path); }, py::arg("path"),
+      "Reads an intrinsics.txt file (fx, fy, cx, cy, depth_scale, width, height; see docs/usage.md).");
+}
+
+} // namespace
+
+void
+bindFiles(py::module_& m)
+{
+  py::register_exception<io::InputError>(m, "InputError", PyExc_OSError);
+  bindIntrinsics(m);
+  m.def("read_pcd", &readPcd, py::arg("path"), py::arg("return_viewpoint") = false,
+        "Reads an organized PCD file (checked as range_nlm_denoise reads it) as an H x W x 3 float32 array, "
+        "NaN where invalid; with return_viewpoint=True also the sensor origin of its VIEWPOINT line.");
+  m.def("write_pcd", &writePcd, py::arg("path"), py::arg("points"),
+        py::arg("viewpoint") = std::vector<float>{0.0f, 0.0f, 0.0f},
+        "Writes an H x W x 3 array as an organized binary PCD file (x, y, z), atomically.");
+  m.def("read_depth_png", &readDepth, py::arg("path"), "Reads a 16-bit greyscale PNG as an H x W uint16 array.");
+  m.def("write_depth_png", &writeDepth, py::arg("path"), py::arg("depth"),
+        "Writes an H x W uint16 array as a 16-bit greyscale PNG, atomically.");
+  m.def("render_before_after", &renderBeforeAfter, py::arg("before"), py::arg("after"), py::arg("path"),
+        py::arg("mode") = "shaded", py::arg("curvature_limit") = 0.0f,
+        "Draws two H x W x 3 frames side by side on one scale into a PNG (range_nlm_render --before --after); "
+        "returns the curvature scale used (0 in shaded mode).");
+}
+
+} // namespace python
+} // namespace range_nlm

@@ -1,0 +1,59 @@
+"""Files through range_nlm::io: PCD frames, depth PNGs, intrinsics; errors name the file."""
+
+import numpy as np
+import pytest
+
+import range_nlm
+from conftest import SOURCE_DIR, bits, plane
+
+
+def test_pcd_round_trip_keeps_points_nan_and_viewpoint(tmp_path):
+    points = plane(width=20, height=10)
+    points[2, 3] = np.nan
+    path = str(tmp_path / "frame.pcd")
+    range_nlm.write_pcd(path, points, viewpoint=(0.5, 0.0, -1.0))
+    back, viewpoint = range_nlm.read_pcd(path, return_viewpoint=True)
+    assert np.array_equal(bits(back), bits(points))
+    assert viewpoint == (0.5, 0.0, -1.0)
+
+
+def test_depth_png_round_trip(tmp_path):
+    depth = (np.arange(12 * 9, dtype=np.uint16) * 600).reshape(9, 12)
+    path = str(tmp_path / "depth.png")
+    range_nlm.write_depth_png(path, depth)
+    assert np.array_equal(range_nlm.read_depth_png(path), depth)
+    with pytest.raises(TypeError, match="uint16"):
+        range_nlm.write_depth_png(path, depth.astype(np.float32))
+
+
+def test_missing_and_damaged_files_raise_errors_naming_them(tmp_path):
+    missing = str(tmp_path / "missing.pcd")
+    with pytest.raises(OSError, match="missing.pcd"):
+        range_nlm.read_pcd(missing)
+    with pytest.raises(range_nlm.InputError):
+        range_nlm.read_pcd(missing)
+    damaged = tmp_path / "damaged.png"
+    damaged.write_bytes(b"not a png")
+    with pytest.raises(ValueError, match=r"damaged.png.*not a PNG file"):
+        range_nlm.read_depth_png(str(damaged))
+    bad = tmp_path / "intrinsics.txt"
+    bad.write_text("fx 525\nfocal 3\n")
+    with pytest.raises(ValueError, match=r"intrinsics.txt' line 2: unknown key 'focal'"):
+        range_nlm.read_intrinsics(bad)
+
+
+def test_shipped_frame_and_intrinsics_are_read():
+    folder = SOURCE_DIR + "/data/depth-images/tum-fr2-desk-pair/"
+    depth = range_nlm.read_depth_png(folder + "1_depth.png")
+    intrinsics = range_nlm.read_intrinsics(folder + "intrinsics.txt")
+    assert depth.shape == (480, 640) and depth.dtype == np.uint16
+    assert intrinsics.depth_scale == 5000 and intrinsics.source.endswith("intrinsics.txt")
+
+
+def test_render_before_after_writes_a_picture(tmp_path):
+    points = plane(width=40, height=30)
+    after = range_nlm.denoise(points, search_window=5)
+    limit = range_nlm.render_before_after(points, after, str(tmp_path / "ba.png"), mode="curvature")
+    assert limit > 0
+    with open(tmp_path / "ba.png", "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"

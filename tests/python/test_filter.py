@@ -1,0 +1,190 @@
+"""denoise() and denoise_depth(): output bit-identical to range_nlm_denoise, NaN handling, the
+GIL released while filtering, no memory growth over many calls."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import range_nlm
+from conftest import SMALL, SMALL_CLI, bits, plane, run_tool
+
+
+def test_denoise_is_bit_identical_to_the_cli(scene, tmp_path):
+    source = scene / "noisy" / "frame_0000.pcd"
+    run_tool("range_nlm_denoise", source, tmp_path / "out.pcd", *SMALL_CLI)
+    expected = range_nlm.read_pcd(str(tmp_path / "out.pcd"))
+    points = range_nlm.read_pcd(str(source))
+    result = range_nlm.denoise(points, **SMALL)
+    assert result.shape == points.shape and result.dtype == np.float32
+    assert not np.array_equal(bits(result), bits(points))  # the filter did move points
+    assert np.array_equal(bits(result), bits(expected))
+
+
+def test_parameters_object_and_keywords_give_the_same_result(frames):
+    by_keywords = range_nlm.denoise(frames[0], iterations=1, **SMALL)
+    by_object = range_nlm.denoise(frames[0], range_nlm.Parameters(iterations=1, **SMALL))
+    assert np.array_equal(bits(by_keywords), bits(by_object))
+    assert not np.array_equal(bits(by_keywords), bits(range_nlm.denoise(frames[0], **SMALL)))
+
+
+def test_denoise_depth_is_bit_identical_to_the_cli_png(scene, tmp_path):
+    points = range_nlm.read_pcd(str(scene / "noisy" / "frame_0000.pcd"))
+    depth = np.nan_to_num(np.round(points[:, :, 2] * 5000.0), nan=0.0).astype(np.uint16)
+    range_nlm.write_depth_png(str(tmp_path / "in.png"), depth)
+    (tmp_path / "intrinsics.txt").write_text("fx 60\nfy 60\ncx 31.5\ncy 23.5\ndepth_scale 5000\n")
+    run_tool("range_nlm_denoise", tmp_path / "in.png", tmp_path / "out.png", "--intrinsics",
+             tmp_path / "intrinsics.txt", *SMALL_CLI)
+    expected = range_nlm.read_depth_png(str(tmp_path / "out.png"))
+    intrinsics = range_nlm.read_intrinsics(tmp_path / "intrinsics.txt")
+    result = range_nlm.denoise_depth(depth, intrinsics, **SMALL)
+    assert result.dtype == np.uint16 and result.shape == depth.shape
+    assert not np.array_equal(result, depth)
+    assert np.array_equal(result, expected)
+    # The same frame as a dict of intrinsics, and as float metres: the same filtered points.
+    as_dict = {"fx": 60, "fy": 60, "cx": 31.5, "cy": 23.5}
+    metres = range_nlm.denoise_depth(depth.astype(np.float32) / 5000.0, as_dict, **SMALL)
+    assert metres.dtype == np.float32
+    assert np.array_equal(np.round(metres.astype(np.float64) * 5000.0).astype(np.uint16), expected)
+
+
+def test_denoise_depth_points_output_matches_the_depth_output(scene):
+    points = range_nlm.read_pcd(str(scene / "noisy" / "frame_0001.pcd"))
+    depth = np.nan_to_num(np.round(points[:, :, 2] * 1000.0), nan=0.0).astype(np.uint16)
+    intrinsics = range_nlm.Intrinsics(fx=60, fy=60, cx=31.5, cy=23.5, depth_scale=1000)
+    out_points = range_nlm.denoise_depth(depth, intrinsics, output="points", **SMALL)
+    out_depth = range_nlm.denoise_depth(depth, intrinsics, **SMALL)
+    assert out_points.shape == depth.shape + (3,) and out_points.dtype == np.float32
+    encoded = np.nan_to_num(np.round(out_points[:, :, 2].astype(np.float64) * 1000.0), nan=0).astype(np.uint16)
+    assert np.array_equal(encoded, out_depth)
+    assert np.array_equal(depth == 0, out_depth == 0)  # no measurement stays none
+
+
+def test_nan_in_gives_nan_out_in_all_coordinates():
+    points = plane()
+    points[10, 20] = np.nan
+    points[30, 5, 0] = np.nan  # one coordinate is enough to make the point invalid
+    result = range_nlm.denoise(points, **SMALL)
+    invalid = np.zeros(points.shape[:2], bool)
+    invalid[10, 20] = invalid[30, 5] = True
+    assert np.array_equal(np.isnan(result).any(axis=2), invalid)
+    assert np.isnan(result[invalid]).all()
+    assert np.isfinite(result[~invalid]).all()
+
+
+def test_float64_input_gives_float64_output_of_the_float32_result():
+    points = plane(dtype=np.float64)
+    result = range_nlm.denoise(points, **SMALL)
+    assert result.dtype == np.float64 and result.shape == points.shape
+    single = range_nlm.denoise(points.astype(np.float32), **SMALL)
+    assert np.array_equal(result.astype(np.float32), single)
+
+
+def test_all_nan_frame_comes_back_unchanged_with_the_reason():
+    points = np.full((12, 16, 3), np.nan, np.float32)
+    result, info = range_nlm.denoise(points, return_info=True)
+    assert np.isnan(result).all()
+    assert info["filtered"] is False and info["reason"]
+
+
+def test_return_info_gives_the_bandwidths_the_filter_chose():
+    points = plane()
+    _, info = range_nlm.denoise(points, return_info=True, **SMALL)
+    assert info["filtered"] and info["reason"] is None
+    assert info["distance_bandwidth"] > 0 and info["similarity_bandwidth"] > 0
+    # A bandwidth given explicitly is the one used.
+    _, given = range_nlm.denoise(points, return_info=True, distance_bandwidth=0.05, similarity_bandwidth=0.01,
+                                 bandwidth_model="global", **SMALL)
+    assert given["distance_bandwidth"] == pytest.approx(0.05)
+    assert given["similarity_bandwidth"] == pytest.approx(0.01)
+
+
+@pytest.mark.parametrize(
+    "make, error, words",
+    [
+        (lambda p: p[:, :, 2], ValueError, "H x W x 3"),
+        (lambda p: p[:, ::2], ValueError, "C-contiguous"),
+        (lambda p: p.astype(np.int32), TypeError, "float32 or float64"),
+        (lambda p: p.tolist(), TypeError, "numpy array"),
+        (lambda p: p[:0], ValueError, "shape (0, 64, 3)"),
+    ],
+)
+def test_wrong_arrays_raise_errors_that_say_what_is_wrong(make, error, words):
+    with pytest.raises(error, match=r".*" + words.replace("(", r"\(").replace(")", r"\)")):
+        range_nlm.denoise(make(plane()))
+
+
+def test_infinite_coordinate_is_refused_naming_the_pixel():
+    points = plane()
+    points[3, 7, 2] = np.inf
+    with pytest.raises(ValueError, match=r"infinite coordinate at pixel \(7, 3\)"):
+        range_nlm.denoise(points)
+
+
+def test_depth_errors_name_the_problem():
+    with pytest.raises(TypeError, match="uint16, float32 or float64"):
+        range_nlm.denoise_depth(np.ones((8, 8), np.int32))
+    with pytest.raises(ValueError, match="output must be 'depth' or 'points'"):
+        range_nlm.denoise_depth(np.ones((8, 8), np.uint16), output="cloud")
+    with pytest.raises(ValueError, match="but the intrinsics"):
+        range_nlm.denoise_depth(np.ones((8, 8), np.uint16), range_nlm.Intrinsics(width=640, height=480))
+
+
+def test_gil_is_released_while_a_frame_is_filtered():
+    # One OpenMP thread for the filter leaves a core to this thread; while the GIL is held by a
+    # call, this thread would stand still for the whole call.
+    points = plane(width=320, height=240)
+    params = dict(threads=1, search_window=9, iterations=2)
+    start = time.perf_counter()
+    range_nlm.denoise(points, **params)
+    call = time.perf_counter() - start
+    done = threading.Event()
+    worker = threading.Thread(target=lambda: (range_nlm.denoise(points, **params), done.set()))
+    stamps = []
+    worker.start()
+    while not done.is_set():
+        stamps.append(time.perf_counter())
+        time.sleep(0.001)
+    worker.join()
+    gaps = np.diff(stamps)
+    assert len(stamps) > 10
+    assert gaps.max() < 0.5 * call, "this thread stood still for %.3f s of a %.3f s call" % (gaps.max(), call)
+
+
+def _rss_kb():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * 4096 // 1024
+
+
+def test_no_memory_growth_over_a_thousand_calls():
+    # The cheapest setting on a tiny frame: what is measured is what a call keeps, not the filter.
+    points = plane(width=12, height=9)
+    depth = np.full((9, 12), 7500, np.uint16)
+    depth[::3, ::5] += 20
+    intrinsics = range_nlm.Intrinsics(fx=60, fy=60, cx=6, cy=4.5)
+    params = dict(search_window=3, patch_size=1, normal_window=3, normal_presmooth_window=0, iterations=1,
+                  dilation=1, outlier_sigmas=0, bandwidth_samples=20, threads=1)
+
+    def calls(n):
+        for _ in range(n // 2):
+            range_nlm.denoise(points, **params)
+            range_nlm.denoise_depth(depth, intrinsics, **params)
+
+    calls(100)
+    before = _rss_kb()
+    calls(1000)
+    grown = _rss_kb() - before
+    assert grown < 512, "RSS grew by %d kB over 1000 calls" % grown
+
+
+def test_depth_to_points_back_projects_as_the_library_reads_a_png(tmp_path):
+    depth = np.full((6, 8), 5000, np.uint16)
+    depth[2, 3] = 0
+    intrinsics = range_nlm.Intrinsics(fx=100, fy=100, cx=3.5, cy=2.5, depth_scale=5000)
+    points = range_nlm.depth_to_points(depth, intrinsics)
+    assert points.dtype == np.float32 and points.shape == (6, 8, 3)
+    assert np.isnan(points[2, 3]).all()
+    assert points[0, 0].tolist() == pytest.approx([-0.035, -0.025, 1.0])
+    metres = range_nlm.depth_to_points(depth.astype(np.float32) / 5000, intrinsics)
+    assert np.array_equal(bits(metres), bits(points))
