@@ -1212,6 +1212,9 @@ runComparison(const po::variables_map& vm)
     const auto [w, h] = qualitySize(vm);
     u.width = w, u.height = h;
     u.plot = vm["uncertainty-plot"].as<std::string>();
+    if (vm.count("parameter")) // on top of the default
+      for (const std::string& spec : vm["parameter"].as<std::vector<std::string>>())
+        applyParameterOption(spec, u.parameters);
     const auto rows = uncertainty_calibration::run(u, log);
     if (!u.plot.empty())
       uncertainty_calibration::plotReliability(rows, u.plot);

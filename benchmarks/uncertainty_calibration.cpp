@@ -100,8 +100,8 @@ trueErrors(const pcl::PointCloud<pcl::PointNormal>& truth, const Cloud& result, 
 }
 
 Row
-binned(const std::string& model, const std::string& run, const pcl::PointCloud<pcl::PointNormal>& truth,
-       const Cloud& result, const std::vector<float>& sigma, int bins)
+binned(const std::string& scene, const std::string& model, const std::string& run,
+       const pcl::PointCloud<pcl::PointNormal>& truth, const Cloud& result, const std::vector<float>& sigma, int bins)
 {
   const std::vector<double> error = trueErrors(truth, result, run == "temporal");
   const std::vector<unsigned char> feature = featureMask(truth);
@@ -109,6 +109,7 @@ binned(const std::string& model, const std::string& run, const pcl::PointCloud<p
   for (std::size_t i = 0; i < flat.size(); ++i)
     flat[i] = feature[i] ? 0 : 1;
   Row row;
+  row.scene = scene;
   row.model = model;
   row.run = run;
   row.all = calibrationBins(sigma, error, all, bins);
@@ -117,34 +118,54 @@ binned(const std::string& model, const std::string& run, const pcl::PointCloud<p
   return row;
 }
 
+void
+runScene(const Options& options, const std::string& scene_name, const std::string& model, std::ostream& log,
+         std::vector<Row>& rows);
+
 } // namespace
 
 std::vector<Row>
 run(const Options& options, std::ostream& log)
 {
   std::vector<Row> rows;
-  for (const std::string& model : options.models) {
+  for (const std::string& scene_name : options.scenes)
+    for (const std::string& model : options.models)
+      runScene(options, scene_name, model, log, rows);
+  return rows;
+}
+
+namespace
+{
+/// The rows of one scene and noise model: the frame alone and (Options::temporal) the middle
+/// frame of three.
+void
+runScene(const Options& options, const std::string& scene_name, const std::string& model, std::ostream& log,
+         std::vector<Row>& rows)
+{
+  {
     SceneOptions scene;
+    scene.scene = sceneTypeFromString(scene_name);
     scene.width = options.width;
     scene.height = options.height;
     scene.noise = noiseModelFromString(model);
     scene.seed = options.seed;
     scene.frames = options.temporal ? 3 : 1;
     const std::vector<SyntheticFrame> frames = renderSequence(scene);
-    FilterParameters p = FilterParameters::recommended();
+    FilterParameters p = options.parameters;
     p.threads = options.threads;
     p.uncertainty = true;
     {
-      log << "uncertainty calibration: " << model << ", a frame alone" << std::endl;
+      log << "uncertainty calibration: " << scene_name << ", " << model << ", a frame alone" << std::endl;
       NonLocalMeansFilter<pcl::PointXYZ> filter;
       filter.setParameters(p);
       filter.setInputCloud(Cloud::ConstPtr(new Cloud(frames.front().noisy)));
       Cloud out;
       filter.filter(out);
-      rows.push_back(binned(model, "alone", frames.front().truth, out, filter.getUncertainty(), options.bins));
+      rows.push_back(
+          binned(scene_name, model, "alone", frames.front().truth, out, filter.getUncertainty(), options.bins));
     }
     if (options.temporal) {
-      log << "uncertainty calibration: " << model << ", middle frame of three" << std::endl;
+      log << "uncertainty calibration: " << scene_name << ", " << model << ", middle frame of three" << std::endl;
       TemporalNonLocalMeansFilter<pcl::PointXYZ> filter;
       filter.setParameters(p);
       std::deque<Cloud::ConstPtr> window;
@@ -153,11 +174,12 @@ run(const Options& options, std::ostream& log)
       filter.setFrames(window, 1);
       Cloud out;
       filter.filter(out);
-      rows.push_back(binned(model, "temporal", frames[1].truth, out, filter.getUncertainty(), options.bins));
+      rows.push_back(
+          binned(scene_name, model, "temporal", frames[1].truth, out, filter.getUncertainty(), options.bins));
     }
   }
-  return rows;
 }
+} // namespace
 
 namespace
 {
@@ -177,9 +199,9 @@ printTable(const std::vector<Row>& rows, std::ostream& out)
 {
   out << "Per-point uncertainty: actual RMS error / predicted RMS standard deviation per decile of the prediction "
          "(1 = calibrated; within 0.75 ... 1.25 = within 25 %)\n\n";
-  out << "| model | run | worst, all | worst, flat | worst, feature | predicted RMS, deciles 1 / 5 / 10 (mm) | "
+  out << "| scene | model | run | worst, all | worst, flat | worst, feature | predicted RMS, deciles 1 / 5 / 10 (mm) | "
          "ratio per decile, all points |\n";
-  out << "|---|---|---|---|---|---|---|\n";
+  out << "|---|---|---|---|---|---|---|---|\n";
   for (const Row& r : rows) {
     std::ostringstream deciles, range;
     for (std::size_t b = 0; b < r.all.size(); ++b)
@@ -188,7 +210,7 @@ printTable(const std::vector<Row>& rows, std::ostream& out)
       range << std::fixed << std::setprecision(3) << 1000 * r.all.front().predicted << " / "
             << 1000 * r.all[r.all.size() / 2 - (r.all.size() > 1 ? 1 : 0)].predicted << " / "
             << 1000 * r.all.back().predicted;
-    out << "| " << r.model << " | " << r.run << " | " << ratioText(worstRatio(r.all)) << " | "
+    out << "| " << r.scene << " | " << r.model << " | " << r.run << " | " << ratioText(worstRatio(r.all)) << " | "
         << ratioText(worstRatio(r.flat)) << " | " << ratioText(worstRatio(r.feature)) << " | " << range.str() << " | "
         << deciles.str() << " |\n";
   }
@@ -205,7 +227,8 @@ printJson(const std::vector<Row>& rows, std::ostream& out)
     return a;
   };
   for (const Row& r : rows)
-    all.push_back({{"model", r.model},
+    all.push_back({{"scene", r.scene},
+                   {"model", r.model},
                    {"run", r.run},
                    {"worst_ratio", {{"all", worstRatio(r.all)}, {"flat", worstRatio(r.flat)}, {"feature", worstRatio(r.feature)}}},
                    {"all", bins(r.all)},

@@ -7,6 +7,8 @@
 // apart.
 #pragma once
 
+#include <range_nlm/parameters.h>
+
 #include <cstdint>
 #include <ostream>
 #include <string>
@@ -25,6 +27,9 @@ struct Options
   int width = 640, height = 480;
   /// Noise models (range_nlm_synth --noise).
   std::vector<std::string> models{"kinect", "laser", "stripes", "stereo", "kinect1", "tof"};
+  /// Scenes (range_nlm_synth --scene): boxes holds a panel with 3 mm ridges below the noise,
+  /// steps does not.
+  std::vector<std::string> scenes{"boxes", "steps"};
   /// Seed of the generated scenes.
   std::uint64_t seed = 1;
   /// Also the temporal run (middle frame of three, centred window of radius 1).
@@ -34,6 +39,8 @@ struct Options
   /// If not empty: the reliability diagram (predicted against actual RMS per bin, one colour per
   /// model, log-log) is written there as PNG.
   std::string plot;
+  /// The filter's parameters (the uncertainty is switched on).
+  FilterParameters parameters = FilterParameters::recommended();
   int threads = 0;
 };
 
@@ -61,7 +68,7 @@ worstRatio(const std::vector<Bin>& bins);
 /// One model and run: the bins of all, flat and feature points.
 struct Row
 {
-  std::string model, run; // run: "alone" or "temporal"
+  std::string scene, model, run; // run: "alone" or "temporal"
   std::vector<Bin> all, flat, feature;
 };
 

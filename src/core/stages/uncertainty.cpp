@@ -2,7 +2,10 @@
 // uncertainty"): each pass's weights carried into the standard deviation of every point's height.
 #include "stages.h"
 
+#include "../tuned.h"
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -13,17 +16,45 @@ namespace detail
 namespace
 {
 
-/// The variance of a weighted mean of candidates whose errors share a common part: sigma_in^2 the
-/// variance of a point's error before the pass, v the weighted variance of its candidates' heights
-/// about their mean and r = sum w^2 / (sum w)^2 (one over their effective number N). The part of
-/// the candidates' errors that varies among them is estimated without bias by v N / (N - 1) and
-/// is averaged down to v / (N - 1); the rest, sigma_in^2 - v N / (N - 1), is common to them and
-/// stays. Their sum is sigma_in^2 - v, never below what the varying part alone leaves.
-float
-passVariance(float sigma_in2, float v, float r)
+/// What the noise correlation of a frame says about averaging its points: `area`, the number of
+/// pixels whose noise one pixel's noise is correlated with (1 for independent noise), and
+/// `residual`, the share of the noise variance a plane fitted over the search window leaves
+/// (the noise profile's sigma^2 is that share of the true one).
+struct CorrelatedNoise
 {
-  const float reduced = r < 1.0f ? v * r / (1.0f - r) : 0.0f; // v / (N - 1), N = 1 / r
-  return std::max(sigma_in2 - v, reduced);
+  float area = 1.0f;
+  float residual = 1.0f;
+};
+
+/// From the second differences of the frame at lags 1 .. R (estimateNoiseCorrelation): their
+/// variance at lag l is sigma^2 (6 - 8 rho(l) + 2 rho(2 l)), 6 sigma^2 beyond the correlation
+/// length. With rho taken as 0 from lag R on, rho(l) follows from lag R / 2 down. Independent
+/// noise (the automatic dilation's test: the variance at lag 1 at least half that at lag R) has
+/// area 1 and residual 1.
+CorrelatedNoise
+correlatedNoise(const Grid& frame, int search_window, int threads)
+{
+  CorrelatedNoise out;
+  const int lag = std::clamp((tuned::kDilationReferenceLag * frame.width + tuned::kDilationReferenceWidth / 2) /
+                                 tuned::kDilationReferenceWidth,
+                             tuned::kDilationMinLag, tuned::kDilationMaxLag);
+  const NoiseCorrelation c = estimateNoiseCorrelation(frame, tuned::kDilationCorrelationStep, threads);
+  const float far = c.scale[lag - 1] * c.scale[lag - 1];
+  if (!(far > 0.0f) || !(c.scale[0] * c.scale[0] < tuned::kCorrelatedVarianceRatio * far))
+    return out;
+  std::array<float, 2 * tuned::kDilationMaxLag + 1> rho{};
+  for (int l = lag - 1; l >= 1; --l) {
+    const float ratio = c.scale[l - 1] * c.scale[l - 1] / far;
+    rho[l] = std::clamp((6.0f - 6.0f * ratio + 2.0f * rho[2 * l]) / 8.0f, 0.0f, 1.0f);
+  }
+  // Separable: the correlation area in 2D is the square of the line's.
+  float line = 1.0f;
+  for (int l = 1; l < lag; ++l)
+    line += 2.0f * rho[l];
+  out.area = line * line;
+  // A plane over the search window absorbs the noise shared at about half its width.
+  out.residual = std::max(1.0f - rho[std::min(search_window / 2, lag - 1)], 1.0f / out.area);
+  return out;
 }
 
 } // namespace
@@ -39,10 +70,11 @@ propagateUncertainty(FrameContext& ctx)
   const bool prior = first && workspace.prior_sigma.size() == n;
   if (first)
     height.assign(n, 0.0f);
+  const CorrelatedNoise noise =
+      first && !prior ? correlatedNoise(current, ctx.parameters.search_window, ctx.threads) : CorrelatedNoise();
   const float* given = prior ? workspace.prior_sigma.data() : nullptr;
   const float* sigma = workspace.sigma.data(); // the noise profile's sigma times similarity_scale
-  const float unscale = 1.0f / ctx.parameters.similarity_scale;
-  const float* v = workspace.spread.variance.data();
+  const float unscale = 1.0f / (ctx.parameters.similarity_scale * std::sqrt(noise.residual));
   const float* r = workspace.spread.inverse_count.data();
   float* out = height.data();
 #pragma omp parallel for schedule(static) num_threads(ctx.threads)
@@ -51,12 +83,18 @@ propagateUncertainty(FrameContext& ctx)
       out[i] = std::numeric_limits<float>::quiet_NaN();
       continue;
     }
-    // Before the first pass: the measurement's own noise (or the dilated passes' result).
-    float in = first ? sigma[i] * unscale : out[i];
-    if (given && std::isfinite(given[i]))
-      in = given[i];
-    // Points without candidates (no normal, inactive) keep their uncertainty: r is 0 there.
-    out[i] = r[i] > 0.0f ? std::sqrt(passVariance(in * in, v[i], r[i])) : in;
+    if (!first || (given && std::isfinite(given[i]))) {
+      // A pass over filtered points: their errors are shared over the window (each is the mean
+      // of a window that overlaps its neighbours' almost wholly), so the mean keeps them.
+      if (first)
+        out[i] = given[i];
+      continue;
+    }
+    // The first pass over measured points: the mean of N independent candidates of the noise's
+    // variance (r = 1 / N; 0 where the point has no candidate and keeps its own noise), each
+    // correlated with `area` pixels around it.
+    const float in = sigma[i] * unscale;
+    out[i] = in * std::sqrt(r[i] > 0.0f ? std::min(1.0f, r[i] * noise.area) : 1.0f);
   }
 }
 
