@@ -41,21 +41,25 @@ TEST(CalibrationBins, TheWorstRatioIsTheFarthestFromOneOnALogScale)
   EXPECT_TRUE(std::isnan(worstRatio({})));
 }
 
-TEST(UncertaintyCalibration, IndependentNoiseIsCalibratedWithin25Percent)
+TEST(UncertaintyCalibration, FlatPointsUnderIndependentNoiseAreCalibratedWithin25Percent)
 {
+  // The steps scene (no detail below the noise, which the estimate cannot see), a frame alone,
+  // Kinect-like noise: every decile of the flat points within 25 % (docs/quality.md).
   Options o;
   o.width = 320;
   o.height = 240;
   o.models = {"kinect"};
+  o.scenes = {"steps"};
   o.temporal = false;
   o.threads = 2;
   std::ostringstream log;
   const std::vector<Row> rows = run(o, log);
   ASSERT_EQ(rows.size(), 1u);
-  ASSERT_EQ(rows[0].all.size(), 10u);
-  for (const auto* bins : {&rows[0].all, &rows[0].flat})
-    for (const Bin& b : *bins) {
-      EXPECT_GT(b.ratio(), 0.75) << b.predicted << " " << b.actual;
-      EXPECT_LT(b.ratio(), 1.25) << b.predicted << " " << b.actual;
-    }
+  ASSERT_EQ(rows[0].flat.size(), 10u);
+  for (const Bin& b : rows[0].flat) {
+    EXPECT_GT(b.ratio(), 0.75) << b.predicted << " " << b.actual;
+    EXPECT_LT(b.ratio(), 1.25) << b.predicted << " " << b.actual;
+  }
+  // The estimate follows the error over a range of noise levels (near and far surfaces).
+  EXPECT_GT(rows[0].flat.back().predicted, 2.5 * rows[0].flat.front().predicted);
 }
