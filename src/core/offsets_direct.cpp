@@ -22,6 +22,10 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
   const int width = center.width;
   const int height = center.height;
   const int r = search_window / 2;
+  if (spread) {
+    spread->variance.resize(center.size());
+    spread->inverse_count.resize(center.size());
+  }
   const int hp = patch_size / 2;
   (void)threads;
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)

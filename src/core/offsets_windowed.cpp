@@ -129,6 +129,10 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
   const int width = center.width;
   const int height = center.height;
   const int lane_width = laneWidth(width);
+  if (spread) {
+    spread->variance.resize(center.size());
+    spread->inverse_count.resize(center.size());
+  }
   const int reach = search_window / 2 + patch_size / 2;
   // Reads of a row reach from `reach` columns before its first pixel to the window of its last
   // vector: lane_width, then the search window plus the patch; 8 more keep every read inside.
@@ -237,13 +241,14 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
       }
       const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(first);
       if (spread) {
+        // Its own build may contract the sums into other multiply-adds: the offsets come from the
+        // default build below, so that they are the same bits with the option on or off.
         float* const sums = field(6 + 2 * frame_count);
         kernels.window_row_spread(task, v, scratch, out, sums);
         std::copy(sums, sums + width, spread->variance.begin() + at);
         std::copy(sums + lane_width, sums + lane_width + width, spread->inverse_count.begin() + at);
-      } else {
-        kernels.window_row(task, v, scratch, out);
       }
+      kernels.window_row(task, v, scratch, out);
       std::copy(out, out + width, offsets.begin() + at);
     }
   }

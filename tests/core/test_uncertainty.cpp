@@ -34,7 +34,7 @@ Grid
 steppedSurface(int w, int h, double sigma, std::uint64_t seed, double holes = 0.1)
 {
   auto cloud = test::makeCloud(
-      w, h, [](double a, double, int u, int) { return 1.0 + 0.2 * a + (u > w / 2 ? 0.05 : 0.0); }, sigma, seed);
+      w, h, [w](double a, double, int u, int) { return 1.0 + 0.2 * a + (u > w / 2 ? 0.05 : 0.0); }, sigma, seed);
   test::punchHoles(cloud, holes, seed + 1);
   return gridOf(cloud);
 }
@@ -76,7 +76,7 @@ TEST(OffsetSpread, EveryKernelBuildMatchesTheDirectEvaluation)
       for (int gated = 0; gated < 2; ++gated) {
         const std::vector<FrameTerm> terms{{&grid, 0.02f, 0.004f, 1.0f}};
         const std::vector<float>& g = gated ? gate : std::vector<float>();
-        std::vector<float> direct;
+        std::vector<float> direct(grid.size());
         detail::OffsetSpread reference;
         detail::computeOffsetsDirect(grid, normals, terms, 9, patch, 2, {}, direct, g, &reference);
         double largest = 0.0;
@@ -84,7 +84,7 @@ TEST(OffsetSpread, EveryKernelBuildMatchesTheDirectEvaluation)
           largest = std::max(largest, double(v));
         ASSERT_GT(largest, 1e-6) << "the noise must give the candidates a spread";
         for (const detail::RowKernels* kernels : detail::supportedRowKernels()) {
-          std::vector<float> fast, plain;
+          std::vector<float> fast(grid.size()), plain(grid.size());
           detail::OffsetSpread spread;
           detail::computeOffsetsWindowed(*kernels, grid, normals, terms, 9, patch, 2, {}, fast, g, nullptr, &spread);
           detail::computeOffsetsWindowed(*kernels, grid, normals, terms, 9, patch, 2, {}, plain, g);
