@@ -8,6 +8,7 @@
 #include "quality_comparison.h"
 #include "real_noise_comparison.h"
 #include "temporal_comparison.h"
+#include "uncertainty_calibration.h"
 #include "cli/cli.h"
 
 #include <range_nlm/core/pipeline.h>
@@ -1204,6 +1205,24 @@ runComparison(const po::variables_map& vm)
     real_noise::run(r, log, report, &json_text);
     if (json)
       report.str(json_text.str());
+  } else if (vm.count("uncertainty-calibration")) {
+    uncertainty_calibration::Options u;
+    u.threads = vm["threads"].as<int>();
+    u.seed = vm["seed"].as<std::uint64_t>();
+    const auto [w, h] = qualitySize(vm);
+    u.width = w, u.height = h;
+    u.plot = vm["uncertainty-plot"].as<std::string>();
+    if (vm.count("parameter")) // on top of the default
+      for (const std::string& spec : vm["parameter"].as<std::vector<std::string>>())
+        applyParameterOption(spec, u.parameters);
+    const auto rows = uncertainty_calibration::run(u, log);
+    if (!u.plot.empty())
+      uncertainty_calibration::plotReliability(rows, u.plot);
+    uncertainty_calibration::printJson(rows, json_text);
+    if (json)
+      uncertainty_calibration::printJson(rows, report);
+    else
+      uncertainty_calibration::printTable(rows, report);
   } else if (vm.count("quality")) {
     quality::Options q = quality::defaultOptions();
     q.threads = vm["threads"].as<int>();
@@ -1457,6 +1476,8 @@ run(int argc, char** argv)
     ("real-noise-quick", "--real-noise: one noise level and seed per model, without MovingLeastSquares")
     ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal: centred, causal, recursive), by a per-pixel running average / median and by librealsense's temporal filter (reimplemented); temporal jitter and error at the moving edges; and the jitter of the static RealSense D435 triples if found (see --real-noise-data)")
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
+    ("uncertainty-calibration", "instead of timing: whether the per-point uncertainty is calibrated: generated scenes of every sensor noise model (seed --seed, size --quality-size) filtered by the default with the uncertainty on, alone and as the middle frame of three; per decile of the predicted standard deviation the actual RMS error over the predicted RMS, all, flat and feature points")
+    ("uncertainty-plot", po::value<std::string>()->default_value(""), "--uncertainty-calibration: also write the reliability diagram (predicted against actual RMS per decile, log-log, one colour per model) to this PNG")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on
   po::positional_options_description positional;
@@ -1464,7 +1485,8 @@ run(int argc, char** argv)
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
 
-  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation"))
+  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation") ||
+      vm.count("uncertainty-calibration"))
     runComparison(vm);
   else
     runTiming(settingsFrom(vm));

@@ -235,6 +235,7 @@ jobFrom(const po::variables_map& vm)
   });
   job.output = outputOptionsFrom(vm, job.single, job.inputs.front(), job.single ? job.outputs.front() : std::string(),
                                  job.intrinsics);
+  job.output.uncertainty = job.passes.back().parameters.uncertainty; // the last pass's result is written
   if (!job.single)
     for (std::string& output : job.outputs)
       output = replaceExtension(output, job.output.png ? ".png" : ".pcd");
@@ -347,7 +348,8 @@ private:
   void writeNow(PendingFrame& frame, const ChainOutput& result)
   {
     try {
-      writeResult(frame.input_path, frame.output_path, frame.loaded, *result.cloud, job_.output);
+      writeResult(frame.input_path, frame.output_path, frame.loaded, *result.cloud, job_.output,
+                  result.info.uncertainty);
     } catch (const std::bad_alloc&) {
       throw InputError("'" + frame.output_path + "': out of memory while writing the frame");
     }

@@ -41,6 +41,11 @@ public:
   /// Isolated outliers moved onto their neighbours' surface by the last filter() call
   /// (FilterParameters::outlier_sigmas).
   std::size_t getOutliersMoved() const { return workspace_.result().outliers_moved; }
+  /// With FilterParameters::uncertainty (setEstimateUncertainty): the last filter() call's
+  /// per-point uncertainty, organized like the output (index v * width + u): the standard
+  /// deviation of each output point's error along its direction of movement, cloud units (metres),
+  /// NaN for invalid points (docs/method.md, "Per-point uncertainty"). Empty when off.
+  const std::vector<float>& getUncertainty() const { return workspace_.result().uncertainty; }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.

@@ -111,6 +111,10 @@ public:
   /// true; paper preset false). See FilterParameters::patch_guide.
   void setPatchGuide(bool on) { parameters_.patch_guide = on; }
   bool getPatchGuide() const { return parameters_.patch_guide; }
+  /// Also estimate each output point's uncertainty (default false). See
+  /// FilterParameters::uncertainty.
+  void setEstimateUncertainty(bool on) { parameters_.uncertainty = on; }
+  bool getEstimateUncertainty() const { return parameters_.uncertainty; }
 
 protected:
   FilterParameters parameters_ = FilterParameters::recommended();

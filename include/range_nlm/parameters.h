@@ -196,6 +196,11 @@ struct FilterParameters
   bool patch_guide = true;
   /// Evaluation of the patch similarity; see Evaluation.
   Evaluation evaluation = Evaluation::fast;
+  /// Also estimate each output point's uncertainty: the standard deviation of its error along
+  /// its direction of movement, metres, from the weights of the passes (docs/method.md, "Per-point
+  /// uncertainty"); FilterRun::uncertainty, the filters' getUncertainty(). Off: no work for it and
+  /// the same output. Default false.
+  bool uncertainty = false;
 
   /// Throws std::invalid_argument naming the first invalid parameter (in the order of the fields)
   /// and its value.

@@ -92,6 +92,11 @@ public:
     double milliseconds = 0.0;
     /// Its isolated outliers moved onto their neighbours' surface (FilterParameters::outlier_sigmas).
     std::size_t outliers_moved = 0;
+    /// With FilterParameters::uncertainty: the per-point standard deviation of the output along
+    /// each point's direction of movement, organized like the output (index v * width + u),
+    /// metres, NaN for invalid points (as NonLocalMeansFilter::getUncertainty). Empty when off,
+    /// or when the frame was passed through unchanged.
+    std::vector<float> uncertainty;
   };
   /// One entry per frame returned by the last push() or flush(), in the same order.
   const std::vector<OutputInfo>& lastOutputs() const { return last_outputs_; }

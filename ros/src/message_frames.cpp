@@ -276,6 +276,25 @@ depthImageWithZ(const sensor_msgs::Image& image, const Cloud& xyz)
   return out;
 }
 
+sensor_msgs::Image::Ptr
+uncertaintyImage(const std_msgs::Header& header, std::uint32_t width, std::uint32_t height,
+                 const std::vector<float>& sigma)
+{
+  if (sigma.size() != static_cast<std::size_t>(width) * height)
+    throw InvalidMessage(std::to_string(sigma.size()) + " uncertainty values for a frame of " +
+                         sizeText(width, height));
+  sensor_msgs::Image::Ptr out(new sensor_msgs::Image);
+  out->header = header;
+  out->height = height;
+  out->width = width;
+  out->encoding = "32FC1";
+  out->is_bigendian = 0;
+  out->step = width * sizeof(float);
+  out->data.resize(sigma.size() * sizeof(float));
+  std::memcpy(out->data.data(), sigma.data(), out->data.size());
+  return out;
+}
+
 bool
 hasValidPoint(const Cloud& cloud)
 {

@@ -62,6 +62,8 @@ TemporalFilterNodelet::advertise()
 {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
   const int queue = settings_.queue_size;
+  // Published beside the filtered output while ~uncertainty is on and it has subscribers.
+  uncertainty_output_ = private_node.advertise<sensor_msgs::Image>("uncertainty/image", queue);
   if (settings_.input == "points") {
     output_ = private_node.advertise<sensor_msgs::PointCloud2>(
         "output", queue, [this](const ros::SingleSubscriberPublisher&) { onConnectionChange(); },
@@ -178,6 +180,7 @@ TemporalFilterNodelet::publishClouds(const std::vector<CloudStream::Output>& rea
     }
     try {
       output_.publish(sensor_msgs::PointCloud2::ConstPtr(pointCloud2WithXyz(*out.tag, *out.cloud)));
+      publishUncertainty(out.tag->header, *out.cloud, out.uncertainty);
       statistics_.published((ros::Time::now() - out.tag->header.stamp).toSec(), out.milliseconds);
       last_bandwidths_ = out.bandwidths;
     } catch (const std::exception& e) {
@@ -223,12 +226,23 @@ TemporalFilterNodelet::publishDepth(const std::vector<DepthStream::Output>& read
       sensor_msgs::CameraInfo::Ptr info_out(new sensor_msgs::CameraInfo(*out.tag.second));
       info_out->header = in.header;
       camera_output_.publish(filtered, sensor_msgs::CameraInfo::ConstPtr(info_out));
+      publishUncertainty(in.header, *out.cloud, out.uncertainty);
       statistics_.published((ros::Time::now() - in.header.stamp).toSec(), out.milliseconds);
       last_bandwidths_ = out.bandwidths;
     } catch (const std::exception& e) {
       dropped("depth image", in.header, e.what());
     }
   }
+}
+
+void
+TemporalFilterNodelet::publishUncertainty(const std_msgs::Header& header, const Cloud& cloud,
+                                          const std::vector<float>& sigma)
+{
+  if (sigma.empty() || uncertainty_output_.getNumSubscribers() == 0)
+    return;
+  uncertainty_output_.publish(
+      sensor_msgs::Image::ConstPtr(uncertaintyImage(header, cloud.width, cloud.height, sigma)));
 }
 
 void

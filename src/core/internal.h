@@ -32,13 +32,25 @@ void
 estimateNormalsGated(const Grid& grid, int window, const Viewpoint& viewpoint, int threads,
                      const std::vector<float>& gate, int pass, NormalField& normals, std::vector<float>* planes,
                      NormalField* first = nullptr);
+/// Per point, what the weights of computeOffsets say besides the offset h_i (for the per-point
+/// uncertainty, FilterParameters::uncertainty): the weighted variance of the candidates' heights
+/// about h_i, sum_j w_j (h_j - h_i)^2 / sum_j w_j, and one over their effective number,
+/// sum_j w_j^2 / (sum_j w_j)^2 (w_j with the frame weights Psi_k). Both 0 where h_i is 0 because
+/// the point is inactive, invalid, has no normal or no candidate.
+struct OffsetSpread
+{
+  std::vector<float> variance, inverse_count;
+};
+
 /// computeOffsets with the padded frames of the windowed evaluation in `planes` if given (resized
-/// as needed), else in memory of their own; the direct evaluation does not use it.
+/// as needed), else in memory of their own; the direct evaluation does not use it. With `spread`
+/// also its two sums per point (resized to the grid; the evaluation then takes the kernels that
+/// accumulate them, and the offsets are the same bits as without).
 void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,
                const std::vector<unsigned char>& active, std::vector<float>& offsets,
-               const std::vector<float>& patch_gate, std::vector<float>* planes);
+               const std::vector<float>& patch_gate, std::vector<float>* planes, OffsetSpread* spread = nullptr);
 /// The piecewise linear interpolation of NoiseProfile::sigmaAt / extentAt (ranges xs, values ys)
 /// at the n points x into out, with the same result for every point, vectorized.
 /// With ys2 and out2 also the profile (xs, *ys2) into out2, in the same scan over the bins.
@@ -150,12 +162,14 @@ resolveThreads(int threads);
 void
 computeOffsetsDirect(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                      int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                     std::vector<float>& offsets, const std::vector<float>& patch_gate = {});
+                     std::vector<float>& offsets, const std::vector<float>& patch_gate = {},
+                     OffsetSpread* spread = nullptr);
 /// The windowed evaluation (Evaluation::fast) with the fastest build of the SIMD kernels.
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                    int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                   std::vector<float>& offsets, const std::vector<float>& patch_gate, std::vector<float>* planes);
+                   std::vector<float>& offsets, const std::vector<float>& patch_gate, std::vector<float>* planes,
+                   OffsetSpread* spread = nullptr);
 /// The windowed evaluation with the given build of the SIMD kernels; `offsets` has the size of
 /// the grid. The padded frames go into `planes` if given (resized as needed), else into memory of
 /// their own. For tests; computeOffsetsFast takes the fastest build.
@@ -163,7 +177,8 @@ void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       const std::vector<float>& patch_gate = {}, std::vector<float>* planes = nullptr);
+                       const std::vector<float>& patch_gate = {}, std::vector<float>* planes = nullptr,
+                       OffsetSpread* spread = nullptr);
 
 } // namespace detail
 } // namespace range_nlm

@@ -5,6 +5,7 @@
 
 #include "internal.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace range_nlm
@@ -16,11 +17,15 @@ void
 computeOffsetsDirect(const Grid& center, const NormalField& normals,
                      const std::vector<FrameTerm>& frames, int search_window, int patch_size,
                      int threads, const std::vector<unsigned char>& active,
-                     std::vector<float>& offsets, const std::vector<float>& patch_gate)
+                     std::vector<float>& offsets, const std::vector<float>& patch_gate, OffsetSpread* spread)
 {
   const int width = center.width;
   const int height = center.height;
   const int r = search_window / 2;
+  if (spread) {
+    spread->variance.resize(center.size());
+    spread->inverse_count.resize(center.size());
+  }
   const int hp = patch_size / 2;
   (void)threads;
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
@@ -28,6 +33,8 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
     for (int u = 0; u < width; ++u) {
       const int i = v * width + u;
       offsets[i] = 0.0f;
+      if (spread)
+        spread->variance[i] = spread->inverse_count[i] = 0.0f;
       if (!center.valid[i] || (!active.empty() && !active[i]) || !std::isfinite(normals.nx[i]))
         continue;
       const float nx = normals.nx[i], ny = normals.ny[i], nz = normals.nz[i];
@@ -35,7 +42,7 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
       // Pixels of the centre patch farther than this from its tangent plane count as holes.
       const bool gated = !patch_gate.empty();
       const double gate = gated ? patch_gate[i] : 0.0;
-      double num = 0.0, den = 0.0;
+      double num = 0.0, den = 0.0, num2 = 0.0, den2 = 0.0; // and sum w h^2, sum w^2
       for (const FrameTerm& term : frames) {
         const Grid& g = *term.grid;
         const Grid& c = term.patches ? *term.patches : center; // the centre patch's grid
@@ -80,10 +87,17 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
             const double w = term.weight * expNonPositiveInline(arg);
             num += w * h;
             den += w;
+            num2 += w * h * h;
+            den2 += w * w;
           }
         }
       }
       offsets[i] = den > 0.0 ? static_cast<float>(num / den) : 0.0f;
+      if (spread && den > 0.0) {
+        const double mean = num / den;
+        spread->variance[i] = static_cast<float>(std::max(0.0, num2 / den - mean * mean));
+        spread->inverse_count[i] = static_cast<float>(den2 / (den * den));
+      }
     }
   }
 }

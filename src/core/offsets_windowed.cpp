@@ -124,11 +124,15 @@ void
 computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const NormalField& normals,
                        const std::vector<FrameTerm>& frames, int search_window, int patch_size, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       const std::vector<float>& patch_gate, std::vector<float>* storage)
+                       const std::vector<float>& patch_gate, std::vector<float>* storage, OffsetSpread* spread)
 {
   const int width = center.width;
   const int height = center.height;
   const int lane_width = laneWidth(width);
+  if (spread) {
+    spread->variance.resize(center.size());
+    spread->inverse_count.resize(center.size());
+  }
   const int reach = search_window / 2 + patch_size / 2;
   // Reads of a row reach from `reach` columns before its first pixel to the window of its last
   // vector: lane_width, then the search window plus the patch; 8 more keep every read inside.
@@ -184,8 +188,9 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
 #pragma omp parallel num_threads(threads)
   {
     // Per thread: the kernel scratch (cache-line aligned), then the staged row: normal, active
-    // flag, 1 / d^2 and 1 / s^2 per frame, the patch gate, and the output.
-    const std::size_t row_floats = static_cast<std::size_t>(lane_width) * (6 + 2 * frame_count);
+    // flag, 1 / d^2 and 1 / s^2 per frame, the patch gate, and the output (with `spread` also
+    // its two rows).
+    const std::size_t row_floats = static_cast<std::size_t>(lane_width) * (6 + 2 * frame_count + (spread ? 2 : 0));
     std::vector<float> storage(scratch_floats + row_floats + 16);
     const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(storage.data());
     float* scratch = storage.data() + ((64 - address % 64) % 64) / sizeof(float);
@@ -234,8 +239,17 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
         if (frames[f].inverse_similarity2)
           std::copy_n(&(*frames[f].inverse_similarity2)[first], width, field(6 + 2 * f));
       }
+      const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(first);
+      if (spread) {
+        // Its own build may contract the sums into other multiply-adds: the offsets come from the
+        // default build below, so that they are the same bits with the option on or off.
+        float* const sums = field(6 + 2 * frame_count);
+        kernels.window_row_spread(task, v, scratch, out, sums);
+        std::copy(sums, sums + width, spread->variance.begin() + at);
+        std::copy(sums + lane_width, sums + lane_width + width, spread->inverse_count.begin() + at);
+      }
       kernels.window_row(task, v, scratch, out);
-      std::copy(out, out + width, offsets.begin() + static_cast<std::ptrdiff_t>(first));
+      std::copy(out, out + width, offsets.begin() + at);
     }
   }
 }
@@ -243,10 +257,11 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
 void
 computeOffsetsFast(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                    int search_window, int patch_size, int threads, const std::vector<unsigned char>& active,
-                   std::vector<float>& offsets, const std::vector<float>& patch_gate, std::vector<float>* planes)
+                   std::vector<float>& offsets, const std::vector<float>& patch_gate, std::vector<float>* planes,
+                   OffsetSpread* spread)
 {
   computeOffsetsWindowed(rowKernels(), center, normals, frames, search_window, patch_size, threads, active, offsets,
-                         patch_gate, planes);
+                         patch_gate, planes, spread);
 }
 
 } // namespace detail

@@ -288,6 +288,11 @@ normalAndMoveEntries()
                                                     "(windowed) one")
       .rosSwitch("direct", int(Evaluation::direct), -1)
       .pass("evaluation"),
+    Entry("uncertainty", &P::uncertainty)
+      .docs("[Per-point uncertainty](#per-point-uncertainty)")
+      .help("also estimate each output point's standard deviation along its direction of movement, metres, from "
+            "the filter's weights (an 'uncertainty' field in PCD output)")
+      .cli("uncertainty").ros("uncertainty").pass("uncertainty"),
   };
   // clang-format on
 }

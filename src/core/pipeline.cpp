@@ -49,14 +49,14 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
                const std::vector<float>& patch_gate)
 {
   detail::computeOffsets(center, normals, frames, search_window, patch_size, evaluation, threads, active, offsets,
-                         patch_gate, nullptr);
+                         patch_gate, nullptr, nullptr);
 }
 
 void
 detail::computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                        int search_window, int patch_size, Evaluation evaluation, int threads,
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
-                       const std::vector<float>& patch_gate, std::vector<float>* planes)
+                       const std::vector<float>& patch_gate, std::vector<float>* planes, OffsetSpread* spread)
 {
   for (const FrameTerm& term : frames)
     if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height ||
@@ -68,13 +68,17 @@ detail::computeOffsets(const Grid& center, const NormalField& normals, const std
     throw std::invalid_argument("range_nlm: the patch gate must have one entry per point");
   // Both evaluations write every element.
   offsets.resize(center.size());
+  if (spread) {
+    spread->variance.resize(center.size());
+    spread->inverse_count.resize(center.size());
+  }
   threads = detail::resolveThreads(threads);
   if (evaluation == Evaluation::direct)
     detail::computeOffsetsDirect(center, normals, frames, search_window, patch_size, threads, active, offsets,
-                                 patch_gate);
+                                 patch_gate, spread);
   else
     detail::computeOffsetsFast(center, normals, frames, search_window, patch_size, threads, active, offsets,
-                               patch_gate, planes);
+                               patch_gate, planes, spread);
 }
 
 void
@@ -249,6 +253,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   parameters.validate();
   std::vector<const Grid*> frames = given;
   workspace.run.outliers_moved = 0; // every path below keeps it
+  workspace.prior_sigma.clear();
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
@@ -289,6 +294,8 @@ detail::runContiguous(const std::vector<const Grid*>& frames, int center, const 
   checkFrames(frames, center, parameters);
   FrameContext ctx(frames, center, parameters, viewpoint, active, workspace);
   startOutput(ctx);
+  if (!parameters.uncertainty)
+    workspace.run.uncertainty.clear();
   if (ctx.count > 1) {
     StageTracker stage(workspace.observer, 0);
     stage.start(Stage::neighbour_frames);
@@ -317,9 +324,14 @@ detail::runContiguous(const std::vector<const Grid*>& frames, int center, const 
     buildFrameTerms(ctx);
     stage.start(Stage::offsets);
     computeFrameOffsets(ctx);
+    if (parameters.uncertainty)
+      propagateUncertainty(ctx);
     stage.start(Stage::displacement);
     displaceCurrentFrame(ctx);
+    if (parameters.uncertainty)
+      uncertaintyAlongMoves(ctx, resolvedDisplacement(ctx));
   }
+  workspace.prior_sigma.clear(); // the dilated passes' result, used by this run only
 }
 
 } // namespace range_nlm

@@ -1,6 +1,8 @@
 // The buffers of a filter run (private: the public API holds them through FilterWorkspace).
 #pragma once
 
+#include "internal.h"
+
 #include <range_nlm/core/pipeline.h>
 
 #include <vector>
@@ -53,6 +55,14 @@ struct Workspace
   std::vector<Workspace> levels;
   /// The current frame with its isolated outliers moved (FilterParameters::outlier_sigmas).
   Grid corrected;
+  /// Per-point uncertainty (FilterParameters::uncertainty): the weights' spread and effective
+  /// number of candidates of a pass, the standard deviation of each point's height along its
+  /// normal after the passes so far, and the one the next contiguous run starts from (the dilated
+  /// passes' merged result; empty: the noise profile's sigma).
+  detail::OffsetSpread spread;
+  std::vector<float> height_sigma, prior_sigma;
+  /// Dilated passes: the merged phases' sigma along their moves (the result with one iteration).
+  std::vector<float> phase_uncertainty;
   /// The frames brought to a common level (levelling of low-frequency offsets between frames),
   /// and per frame whether it moved against the current one (-1: not analysed).
   std::vector<Grid> leveled;

@@ -42,6 +42,7 @@ expectSameParameters(const FilterParameters& a, const FilterParameters& b, const
   EXPECT_EQ(a.cross_frame_bandwidth, b.cross_frame_bandwidth);
   EXPECT_EQ(a.patch_guide, b.patch_guide);
   EXPECT_EQ(a.evaluation, b.evaluation);
+  EXPECT_EQ(a.uncertainty, b.uncertainty);
 }
 
 bool

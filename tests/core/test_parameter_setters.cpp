@@ -58,6 +58,7 @@ accessors()
       RANGE_NLM_ACCESSORS(displacement, Displacement),
       RANGE_NLM_ACCESSORS(cross_frame_bandwidth, CrossFrameBandwidth),
       RANGE_NLM_ACCESSORS(patch_guide, PatchGuide),
+      RANGE_NLM_ACCESSORS(uncertainty, EstimateUncertainty),
       RANGE_NLM_ACCESSORS(evaluation, Evaluation),
   };
   return all;

@@ -231,6 +231,62 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
   EXPECT_NE(log.find(" search_window=7 (set) patch=3 (set) dilation=0 "), std::string::npos) << log;
 }
 
+TEST(RosNode, TheUncertaintyImageIsPublishedWhenEnabledWithTheInputHeader)
+{
+  ros::param::set("/rnlm_sigma/temporal_radius", 1);
+  ros::param::set("/rnlm_sigma/search_window", 7);
+  ros::param::set("/rnlm_sigma/patch", 3);
+  ros::param::set("/rnlm_sigma/uncertainty", true);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_sigma", "~input:=/sigma/in", "~output:=/sigma/out"},
+                    g_master->directory() + "/rnlm_sigma.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/sigma/in", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/sigma/out");
+  Inbox<sensor_msgs::Image> sigma("/rnlm_sigma/uncertainty/image");
+  ASSERT_TRUE(waitFor([&] {
+    return input.getNumSubscribers() > 0 && output.publishers() > 0 && sigma.publishers() > 0;
+  })) << readLog(node.log());
+  FilterParameters p = testParameters();
+  p.uncertainty = true;
+  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::causal, p);
+  for (int k = 0; k < 2; ++k) {
+    const Cloud::Ptr cloud = frame(k);
+    const sensor_msgs::PointCloud2 in = toPointCloud2(*cloud, 300 + k, 7);
+    input.publish(in);
+    ASSERT_TRUE(output.next()) << readLog(node.log());
+    const auto image = sigma.next();
+    ASSERT_TRUE(image) << "no uncertainty image\n" << readLog(node.log());
+    EXPECT_EQ(image->header.stamp, in.header.stamp);
+    EXPECT_EQ(image->header.frame_id, in.header.frame_id);
+    EXPECT_EQ(image->encoding, "32FC1");
+    ASSERT_EQ(image->width, cloud->width);
+    ASSERT_EQ(image->height, cloud->height);
+    ASSERT_EQ(image->data.size(), cloud->size() * sizeof(float));
+    ASSERT_EQ(expected.push(cloud).size(), 1u);
+    const std::vector<float>& want = expected.lastOutputs().front().uncertainty;
+    ASSERT_EQ(want.size(), cloud->size());
+    EXPECT_EQ(std::memcmp(image->data.data(), want.data(), image->data.size()), 0);
+  }
+}
+
+TEST(RosNode, TheUncertaintyImageIsNotPublishedWhenOff)
+{
+  ros::param::set("/rnlm_nosigma/search_window", 7);
+  ros::param::set("/rnlm_nosigma/patch", 3);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_nosigma", "~input:=/nosigma/in", "~output:=/nosigma/out"},
+                    g_master->directory() + "/rnlm_nosigma.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/nosigma/in", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/nosigma/out");
+  Inbox<sensor_msgs::Image> sigma("/rnlm_nosigma/uncertainty/image");
+  ASSERT_TRUE(waitFor([&] {
+    return input.getNumSubscribers() > 0 && output.publishers() > 0 && sigma.publishers() > 0;
+  })) << readLog(node.log());
+  input.publish(toPointCloud2(*frame(0), 400, 1));
+  ASSERT_TRUE(output.next()) << readLog(node.log());
+  EXPECT_FALSE(sigma.next(0.5));
+}
+
 TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
 {
   ros::param::set("/rnlm_centred/temporal_radius", 1);

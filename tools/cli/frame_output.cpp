@@ -2,9 +2,18 @@
 
 #include "cli/cli.h"
 
+#include <pcl/conversions.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
+
+#include <unistd.h>
 
 namespace po = boost::program_options;
 
@@ -81,10 +90,91 @@ outputOptionsFrom(const po::variables_map& vm, bool single, const std::string& f
   return out;
 }
 
+std::string
+uncertaintyImagePath(const std::string& png_output)
+{
+  const std::string::size_type dot = png_output.rfind('.'), slash = png_output.rfind('/');
+  const bool extension = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return (extension ? png_output.substr(0, dot) : png_output) + "_uncertainty.pfm";
+}
+
+void
+writeFloatImage(const std::string& path, const std::vector<float>& values, int width, int height)
+{
+  if (width <= 0 || height <= 0 || values.size() != static_cast<std::size_t>(width) * height)
+    throw InputError("'" + path + "': " + std::to_string(values.size()) + " values for a " + std::to_string(width) +
+                     " x " + std::to_string(height) + " float image");
+  const std::string header = "Pf\n" + std::to_string(width) + " " + std::to_string(height) + "\n-1.0\n";
+  std::vector<float> rows(values.size());
+  for (int v = 0; v < height; ++v) // PFM stores the bottom row first
+    std::copy_n(&values[static_cast<std::size_t>(height - 1 - v) * width], width,
+                &rows[static_cast<std::size_t>(v) * width]);
+  static_assert(sizeof(float) == 4, "PFM holds 32-bit floats");
+  // A temporary file beside it, renamed into place once complete: no half-written image ever
+  // carries the final name.
+  const std::filesystem::path target(path);
+  const std::filesystem::path temporary =
+      target.parent_path() / (io::temporaryPrefix(target.filename().string()) + std::to_string(::getpid()));
+  {
+    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
+    file.write(header.data(), static_cast<std::streamsize>(header.size()));
+    // Little-endian hosts, as the scale -1.0 says.
+    file.write(reinterpret_cast<const char*>(rows.data()), static_cast<std::streamsize>(rows.size() * sizeof(float)));
+    file.close();
+    if (!file) {
+      std::error_code ignored;
+      std::filesystem::remove(temporary, ignored);
+      throw InputError("cannot write the uncertainty image '" + path + "'");
+    }
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, target, error);
+  if (error) {
+    std::filesystem::remove(temporary, error);
+    throw InputError("cannot write the uncertainty image '" + path + "': " + error.message());
+  }
+}
+
+void
+setFloatField(pcl::PCLPointCloud2& blob, const std::string& name, const std::vector<float>& values)
+{
+  const std::size_t points = static_cast<std::size_t>(blob.width) * blob.height;
+  if (values.size() != points)
+    throw std::invalid_argument("setFloatField: " + std::to_string(values.size()) + " values for " +
+                                std::to_string(points) + " points");
+  for (const pcl::PCLPointField& f : blob.fields)
+    if (f.name == name && f.datatype == pcl::PCLPointField::FLOAT32 && f.count == 1) {
+      for (std::size_t i = 0; i < points; ++i)
+        std::memcpy(&blob.data[i * blob.point_step + f.offset], &values[i], sizeof(float));
+      return;
+    }
+  pcl::PCLPointCloud2 out = blob;
+  out.data.clear();
+  pcl::PCLPointField field;
+  field.name = name;
+  field.offset = blob.point_step;
+  field.datatype = pcl::PCLPointField::FLOAT32;
+  field.count = 1;
+  out.fields.push_back(field);
+  out.point_step = blob.point_step + sizeof(float);
+  out.row_step = out.point_step * blob.width;
+  out.data.resize(static_cast<std::size_t>(out.point_step) * points);
+  for (std::size_t i = 0; i < points; ++i) {
+    std::memcpy(&out.data[i * out.point_step], &blob.data[i * blob.point_step], blob.point_step);
+    std::memcpy(&out.data[i * out.point_step + blob.point_step], &values[i], sizeof(float));
+  }
+  blob = std::move(out);
+}
+
 void
 writeResult(const std::string& input_path, const std::string& output_path, LoadedCloud& loaded, const Cloud& result,
-            const OutputOptions& out)
+            const OutputOptions& out, const std::vector<float>& uncertainty)
 {
+  // A frame passed through unfiltered has no estimate: NaN everywhere.
+  std::vector<float> sigma;
+  if (out.uncertainty)
+    sigma = uncertainty.size() == result.size() ? uncertainty
+                                                : std::vector<float>(result.size(), std::nanf(""));
   if (out.png) {
     // A depth the input could hold that filtering moved just past the 16-bit range (a frame near
     // the sensor's largest value) is clamped, with a warning; an input whose depths never fitted
@@ -94,6 +184,8 @@ writeResult(const std::string& input_path, const std::string& output_path, Loade
                  depthsFit(loaded, input_path, out.depth_scale) ? &clamping : nullptr);
     if (clamping.above > 0 || clamping.below > 0)
       warnClamping(output_path, clamping, out.depth_scale);
+    if (out.uncertainty)
+      writeFloatImage(uncertaintyImagePath(output_path), sigma, int(result.width), int(result.height));
     return;
   }
   if (out.colorize) {
@@ -102,10 +194,19 @@ writeResult(const std::string& input_path, const std::string& output_path, Loade
     pcl::PointCloud<pcl::PointXYZRGB> coloured = colorizeByCurvature(result, colour);
     coloured.sensor_origin_ = loaded.origin;
     coloured.sensor_orientation_ = loaded.orientation;
-    saveCloudAtomic(output_path, coloured);
+    if (!out.uncertainty) {
+      saveCloudAtomic(output_path, coloured);
+      return;
+    }
+    pcl::PCLPointCloud2 blob;
+    pcl::toPCLPointCloud2(coloured, blob);
+    setFloatField(blob, "uncertainty", sigma);
+    saveCloudAtomic(output_path, blob, loaded.origin, loaded.orientation);
     return;
   }
   writeXyzToBlob(result, loaded.blob);
+  if (out.uncertainty)
+    setFloatField(loaded.blob, "uncertainty", sigma);
   saveCloudAtomic(output_path, loaded.blob, loaded.origin, loaded.orientation);
 }
 

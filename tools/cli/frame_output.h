@@ -11,6 +11,7 @@
 #include <pcl/point_types.h>
 
 #include <string>
+#include <vector>
 
 namespace range_nlm
 {
@@ -24,7 +25,26 @@ struct OutputOptions
   bool colorize = false;
   RenderParameters colour;
   double depth_scale = DepthIntrinsics().depth_scale;
+  /// Also write the per-point uncertainty (FilterParameters::uncertainty): a float field
+  /// `uncertainty` after the points' fields of PCD output, a float image
+  /// uncertaintyImagePath(output) beside PNG output.
+  bool uncertainty = false;
 };
+
+/// Where the uncertainty image of a PNG output goes: NAME_uncertainty.pfm beside NAME.png.
+std::string
+uncertaintyImagePath(const std::string& png_output);
+
+/// Writes `values` (width x height, row 0 at the top) as a little-endian Portable Float Map
+/// (PFM, "Pf": one 32-bit float channel, rows stored bottom to top as the format says), NaN
+/// where there is no value; atomically as the PCD output. Throws InputError naming the file.
+void
+writeFloatImage(const std::string& path, const std::vector<float>& values, int width, int height);
+
+/// `blob` with a FLOAT32 field `name` holding `values` (one per point): appended after the
+/// other fields, or overwritten where the blob has such a field already.
+void
+setFloatField(pcl::PCLPointCloud2& blob, const std::string& name, const std::vector<float>& values);
 
 /// From --output-format, --colorize and --curvature-limit; `single`: a single-frame run writing
 /// `single_output`, else a directory run whose first input is `first_input`. Throws UsageError
@@ -37,9 +57,12 @@ outputOptionsFrom(const boost::program_options::variables_map& vm, bool single, 
 /// `output_path` as `out` says (PCD outputs atomically; the input's other fields are kept, so
 /// `loaded` takes the new points). A PNG depth that filtering moved just past the 16-bit range is
 /// clamped, with a warning on stderr, unless the input's depths never fitted (then it throws).
+/// With out.uncertainty, `uncertainty` (one value per point, else NaN everywhere: a frame passed
+/// through unfiltered) is written too.
 void
 writeResult(const std::string& input_path, const std::string& output_path, io::LoadedCloud& loaded,
-            const pcl::PointCloud<pcl::PointXYZ>& result, const OutputOptions& out);
+            const pcl::PointCloud<pcl::PointXYZ>& result, const OutputOptions& out,
+            const std::vector<float>& uncertainty = {});
 
 } // namespace tools
 } // namespace range_nlm

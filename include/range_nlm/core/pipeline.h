@@ -302,6 +302,10 @@ struct FilterRun
   /// Isolated outliers of the current frame moved onto their neighbours' surface before
   /// filtering (FilterParameters::outlier_sigmas).
   std::size_t outliers_moved = 0;
+  /// With FilterParameters::uncertainty: per point of `output`, the standard deviation of its
+  /// error along its direction of movement (the normal, or the ray along the line of sight),
+  /// metres; NaN where the point is invalid. Empty otherwise.
+  std::vector<float> uncertainty;
 };
 
 /// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.

@@ -86,6 +86,11 @@ struct RowKernels
   void (*window_row)(const WindowTask& task, int v, float* scratch, float* out);
   /// Floats of per-thread scratch window_row needs for a search window and patch size.
   std::size_t (*window_scratch)(int search_window, int patch_size);
+  /// window_row that also writes, per pixel, the weighted variance of the candidates' heights
+  /// about h, sum w (h_j - h)^2 / sum w, into spread[0 .. lane_width) and one over the effective
+  /// number of candidates, sum w^2 / (sum w)^2, into spread[lane_width .. 2 lane_width) (0 for
+  /// inactive pixels); a build of its own, so that window_row does no work for them.
+  void (*window_row_spread)(const WindowTask& task, int v, float* scratch, float* out, float* spread);
 };
 
 struct PlaneFitKernels

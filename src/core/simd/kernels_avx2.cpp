@@ -30,7 +30,8 @@ const SimdKernels&
 avx2Kernels()
 {
   static const SimdKernels kernels{
-    {&avx2::rows::moments, &avx2::rows::window_smoothing, &avx2::rows::window_row, &avx2::rows::window_scratch},
+    {&avx2::rows::moments, &avx2::rows::window_smoothing, &avx2::rows::window_row, &avx2::rows::window_scratch,
+     &avx2::rows::window_row_spread},
     avx2::plane_fits::kPlaneFitKernels};
   return kernels;
 }

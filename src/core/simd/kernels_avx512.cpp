@@ -37,7 +37,8 @@ const SimdKernels&
 avx512Kernels()
 {
   static const SimdKernels kernels{
-    {&avx512::rows::moments, &avx512::rows::window_smoothing, &avx512::rows::window_row, &avx512::rows::window_scratch},
+    {&avx512::rows::moments, &avx512::rows::window_smoothing, &avx512::rows::window_row, &avx512::rows::window_scratch,
+     &avx512::rows::window_row_spread},
     avx512::plane_fits::kPlaneFitKernels};
   return kernels;
 }

@@ -29,7 +29,8 @@ const SimdKernels&
 baselineKernels()
 {
   static const SimdKernels kernels{
-    {&baseline::rows::moments, &baseline::rows::window_smoothing, &baseline::rows::window_row, &baseline::rows::window_scratch},
+    {&baseline::rows::moments, &baseline::rows::window_smoothing, &baseline::rows::window_row, &baseline::rows::window_scratch,
+     &baseline::rows::window_row_spread},
     baseline::plane_fits::kPlaneFitKernels};
   return kernels;
 }

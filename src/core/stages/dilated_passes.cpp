@@ -5,6 +5,7 @@
 #include "../tuned.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace range_nlm
 {
@@ -36,6 +37,20 @@ subsample(const Grid& from, int k, int u0, int v0, Grid& to, int threads)
   subsample(from.y, from.width, from.height, k, u0, v0, to.y, threads);
   subsample(from.z, from.width, from.height, k, u0, v0, to.z, threads);
   subsample(from.valid, from.width, from.height, k, u0, v0, to.valid, threads);
+}
+
+/// The values of phase (u0, v0) (a `phase`-sized array) back to their pixels of `result`, an
+/// array of the full frame (`width` wide).
+void
+mergePhaseValues(const std::vector<float>& from, const Grid& phase, int k, int u0, int v0, int width,
+                 std::vector<float>& result, int threads)
+{
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int b = 0; b < phase.height; ++b)
+    for (int a = 0; a < phase.width; ++a)
+      result[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k] =
+          from[static_cast<std::size_t>(b) * phase.width + a];
 }
 
 /// The filtered points of phase (u0, v0) back to their pixels of `result` (the full frame).
@@ -76,6 +91,10 @@ finishDilatedPasses(const std::vector<const Grid*>& frames, int center, const Fi
     std::swap(workspace.run.output, workspace.merged);
     workspace.run.bandwidths = phase.run.bandwidths;
     workspace.run.frame_weights = phase.run.frame_weights;
+    if (parameters.uncertainty)
+      std::swap(workspace.run.uncertainty, workspace.phase_uncertainty);
+    else
+      workspace.run.uncertainty.clear();
     return;
   }
   FilterParameters fine = parameters;
@@ -155,6 +174,12 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
   // Kept in the workspace: the next run on frames of this size allocates nothing here.
   Grid& result = workspace.merged;
   copyGrid(input, result, threads);
+  // With the uncertainty: the phases' heights' sigma (the last pass starts from it) and their
+  // sigma along the moves; NaN where a phase kept its points unfiltered.
+  if (parameters.uncertainty) {
+    workspace.prior_sigma.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
+    workspace.phase_uncertainty.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
+  }
   std::vector<Grid>& sub = workspace.phase_frames;
   sub.resize(frames.size());
   std::vector<const Grid*> sub_frames(frames.size());
@@ -180,6 +205,11 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
       }
       split.start(Stage::dilation);
       mergePhase(phase.run.output, k, u0, v0, result, threads);
+      if (parameters.uncertainty) {
+        mergePhaseValues(phase.height_sigma, phase.run.output, k, u0, v0, input.width, workspace.prior_sigma, threads);
+        mergePhaseValues(phase.run.uncertainty, phase.run.output, k, u0, v0, input.width,
+                         workspace.phase_uncertainty, threads);
+      }
     }
   split.stop();
   finishDilatedPasses(frames, center, parameters, viewpoint, active, workspace);

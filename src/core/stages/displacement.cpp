@@ -123,13 +123,18 @@ detail::displaceCurrentFrame(FrameContext& ctx)
   } else {
     limit.clear();
   }
+  applyOffsets(workspace.run.output, workspace.normals, workspace.offsets, resolvedDisplacement(ctx), ctx.viewpoint,
+               limit, parameters.line_of_sight_min_cos);
+}
+
+Displacement
+detail::resolvedDisplacement(const FrameContext& ctx)
+{
   // Automatic: along the line of sight with neighbours, along the normal for one frame.
   const bool neighbours = std::count(ctx.usable.begin(), ctx.usable.end(), true) > 1;
-  const Displacement displacement = parameters.displacement != Displacement::automatic ? parameters.displacement
-                                    : neighbours ? Displacement::line_of_sight
-                                                 : Displacement::normal;
-  applyOffsets(workspace.run.output, workspace.normals, workspace.offsets, displacement, ctx.viewpoint, limit,
-               parameters.line_of_sight_min_cos);
+  return ctx.parameters.displacement != Displacement::automatic ? ctx.parameters.displacement
+         : neighbours                                           ? Displacement::line_of_sight
+                                                                : Displacement::normal;
 }
 
 } // namespace range_nlm

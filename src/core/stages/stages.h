@@ -132,9 +132,28 @@ finishPatchGuide(FrameContext& ctx);
 void
 computeFrameOffsets(FrameContext& ctx);
 
+/// The direction the current frame's points move in: FilterParameters::displacement, automatic
+/// resolved by the frames (along the ray with neighbours, else along the normal).
+/// (displacement.cpp)
+Displacement
+resolvedDisplacement(const FrameContext& ctx);
+
 /// The current frame's points moved by their offsets. (displacement.cpp)
 void
 displaceCurrentFrame(FrameContext& ctx);
+
+// With FilterParameters::uncertainty, after the offsets and after the displacement.
+
+/// The standard deviation of each point's height along its normal after this pass
+/// (workspace.height_sigma) from the one before it (the first pass: workspace.prior_sigma where
+/// finite, else the noise sigma) and the pass's weights (workspace.spread). (uncertainty.cpp)
+void
+propagateUncertainty(FrameContext& ctx);
+
+/// workspace.height_sigma along the direction the points moved in, into
+/// workspace.run.uncertainty. (uncertainty.cpp)
+void
+uncertaintyAlongMoves(FrameContext& ctx, Displacement displacement);
 
 } // namespace detail
 } // namespace range_nlm

@@ -15,6 +15,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace range_nlm_ros
 {
@@ -55,6 +56,13 @@ cloudFromDepthImage(const sensor_msgs::Image& image, const sensor_msgs::CameraIn
 /// depth does not fit 16 bits.
 sensor_msgs::Image::Ptr
 depthImageWithZ(const sensor_msgs::Image& image, const Cloud& xyz);
+
+/// The per-point uncertainty of a filtered frame (range_nlm::FilterParameters::uncertainty;
+/// `sigma`, width x height values, row-major) as a 32FC1 image with `header`: metres, NaN where
+/// the point is invalid. Throws InvalidMessage if the sizes do not match.
+sensor_msgs::Image::Ptr
+uncertaintyImage(const std_msgs::Header& header, std::uint32_t width, std::uint32_t height,
+                 const std::vector<float>& sigma);
 
 /// True if some point of `cloud` is finite.
 bool

@@ -53,6 +53,9 @@ public:
     double milliseconds = 0.0;
     /// Bandwidths the filter chose for it (first iteration); zero if it was not filtered.
     range_nlm::Bandwidths bandwidths;
+    /// With range_nlm::FilterParameters::uncertainty: its per-point standard deviation along
+    /// the moves, metres, row-major, NaN at invalid points; empty otherwise.
+    std::vector<float> uncertainty;
   };
 
   /// Throws std::invalid_argument for invalid settings.
@@ -113,7 +116,8 @@ private:
       tags_.push_back(*pushed);
     const auto& infos = stream_->lastOutputs();
     for (std::size_t i = 0; i < ready.size(); ++i) {
-      out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds, infos[i].bandwidths});
+      out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds, infos[i].bandwidths,
+                           infos[i].uncertainty});
       tags_.pop_front();
     }
   }

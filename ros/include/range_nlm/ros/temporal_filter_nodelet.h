@@ -64,6 +64,8 @@ private:
   void publishClouds(const std::vector<CloudStream::Output>& ready);
   void publishDepth(const std::vector<DepthStream::Output>& ready);
   void dropped(const char* what, const std_msgs::Header& header, const std::string& why);
+  /// ~uncertainty/image: the frame's per-point uncertainty, when it has one and someone listens.
+  void publishUncertainty(const std_msgs::Header& header, const Cloud& cloud, const std::vector<float>& sigma);
   /// Logs a frame-size change that restarted the temporal window.
   template <typename Stream>
   void noteRestart(const Stream& stream, std::uint32_t old_width, std::uint32_t old_height);
@@ -83,6 +85,7 @@ private:
   image_transport::CameraSubscriber camera_input_;
   ros::Publisher output_;
   image_transport::CameraPublisher camera_output_;
+  ros::Publisher uncertainty_output_;
   std::unique_ptr<ParameterReconfigure> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;
