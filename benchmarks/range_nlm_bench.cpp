@@ -4,6 +4,7 @@
 // methods of a configuration taking turns (a warm-up call, then the timed one).
 #include "bench_support.h"
 #include "generalisation_comparison.h"
+#include "hole_filling_comparison.h"
 #include "peers.h"
 #include "quality_comparison.h"
 #include "real_noise_comparison.h"
@@ -552,7 +553,7 @@ bool
 oncePerCall(Stage stage)
 {
   return stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation ||
-         stage == Stage::pyramid;
+         stage == Stage::pyramid || stage == Stage::hole_filling;
 }
 
 /// The breakdown's steps: the conversion, the phases runFilter went through (`stages`, in the
@@ -1187,7 +1188,19 @@ runComparison(const po::variables_map& vm)
   std::ostringstream sink;
   std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
   std::ostringstream report, json_text;
-  if (vm.count("generalisation")) {
+  if (vm.count("hole-filling")) {
+    holes::Options o;
+    o.threads = vm["threads"].as<int>();
+    o.fill_holes = vm["hole-filling-max"].as<int>();
+    const auto [w, h] = qualitySize(vm);
+    o.width = w, o.height = h;
+    const auto results = holes::run(o, log);
+    holes::printJson(results, o, json_text);
+    if (json)
+      holes::printJson(results, o, report);
+    else
+      holes::printTable(results, o, report);
+  } else if (vm.count("generalisation")) {
     generalisation::run(generalisationOptions(vm), log, report, &json_text);
     if (json)
       report.str(json_text.str());
@@ -1457,6 +1470,8 @@ run(int argc, char** argv)
     ("real-noise-quick", "--real-noise: one noise level and seed per model, without MovingLeastSquares")
     ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal: centred, causal, recursive), by a per-pixel running average / median and by librealsense's temporal filter (reimplemented); temporal jitter and error at the moving edges; and the jitter of the static RealSense D435 triples if found (see --real-noise-data)")
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
+    ("hole-filling", "instead of timing: range_nlm's hole filling against librealsense's hole-filling filter (its three modes, reimplemented; on the raw frame and after range_nlm) on generated scenes with shadows beside depth edges and blobs punched out, against ground truth (frame size: --quality-size)")
+    ("hole-filling-max", po::value<int>()->default_value(24), "--hole-filling: range_nlm's --fill-holes")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on
   po::positional_options_description positional;
@@ -1464,7 +1479,8 @@ run(int argc, char** argv)
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
 
-  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation"))
+  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation") ||
+      vm.count("hole-filling"))
     runComparison(vm);
   else
     runTiming(settingsFrom(vm));

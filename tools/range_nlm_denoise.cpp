@@ -347,7 +347,7 @@ private:
   void writeNow(PendingFrame& frame, const ChainOutput& result)
   {
     try {
-      writeResult(frame.input_path, frame.output_path, frame.loaded, *result.cloud, job_.output);
+      writeResult(frame.input_path, frame.output_path, frame.loaded, *result.cloud, job_.output, result.info.filled);
     } catch (const std::bad_alloc&) {
       throw InputError("'" + frame.output_path + "': out of memory while writing the frame");
     }

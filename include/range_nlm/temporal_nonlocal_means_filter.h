@@ -51,6 +51,18 @@ public:
   /// Isolated outliers of the current frame moved onto their neighbours' surface by the last
   /// filter() call (FilterParameters::outlier_sigmas).
   std::size_t getOutliersMoved() const { return workspace_.result().outliers_moved; }
+  /// Indices of the points the last filter() call filled (FilterParameters::fill_holes): they
+  /// were invalid in the input and were given a range by the hole filling, not measured. Empty
+  /// when the hole filling is off.
+  pcl::Indices getFilledIndices() const
+  {
+    pcl::Indices indices;
+    const std::vector<unsigned char>& filled = workspace_.result().filled;
+    for (std::size_t i = 0; i < filled.size(); ++i)
+      if (filled[i])
+        indices.push_back(static_cast<pcl::index_t>(i));
+    return indices;
+  }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.

@@ -92,6 +92,9 @@ public:
     double milliseconds = 0.0;
     /// Its isolated outliers moved onto their neighbours' surface (FilterParameters::outlier_sigmas).
     std::size_t outliers_moved = 0;
+    /// Points given a range by the hole filling (FilterParameters::fill_holes): 1 per filled
+    /// point, in the cloud's order; empty when the hole filling is off.
+    std::vector<unsigned char> filled;
   };
   /// One entry per frame returned by the last push() or flush(), in the same order.
   const std::vector<OutputInfo>& lastOutputs() const { return last_outputs_; }

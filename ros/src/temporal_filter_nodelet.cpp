@@ -62,6 +62,7 @@ TemporalFilterNodelet::advertise()
 {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
   const int queue = settings_.queue_size;
+  filled_mask_ = private_node.advertise<sensor_msgs::Image>("filled/mask", queue);
   if (settings_.input == "points") {
     output_ = private_node.advertise<sensor_msgs::PointCloud2>(
         "output", queue, [this](const ros::SingleSubscriberPublisher&) { onConnectionChange(); },
@@ -178,12 +179,31 @@ TemporalFilterNodelet::publishClouds(const std::vector<CloudStream::Output>& rea
     }
     try {
       output_.publish(sensor_msgs::PointCloud2::ConstPtr(pointCloud2WithXyz(*out.tag, *out.cloud)));
+      publishFilledMask(out.tag->header, *out.cloud, out.filled);
       statistics_.published((ros::Time::now() - out.tag->header.stamp).toSec(), out.milliseconds);
       last_bandwidths_ = out.bandwidths;
     } catch (const std::exception& e) {
       dropped("PointCloud2", out.tag->header, e.what());
     }
   }
+}
+
+void
+TemporalFilterNodelet::publishFilledMask(const std_msgs::Header& header, const Cloud& cloud,
+                                         const std::vector<unsigned char>& filled)
+{
+  if (filled.empty() || filled_mask_.getNumSubscribers() == 0)
+    return;
+  sensor_msgs::Image::Ptr mask(new sensor_msgs::Image);
+  mask->header = header;
+  mask->width = cloud.width;
+  mask->height = cloud.height;
+  mask->encoding = "mono8";
+  mask->step = cloud.width;
+  mask->data.resize(filled.size());
+  for (std::size_t i = 0; i < filled.size(); ++i)
+    mask->data[i] = filled[i] ? 255 : 0;
+  filled_mask_.publish(sensor_msgs::Image::ConstPtr(mask));
 }
 
 void
@@ -223,6 +243,7 @@ TemporalFilterNodelet::publishDepth(const std::vector<DepthStream::Output>& read
       sensor_msgs::CameraInfo::Ptr info_out(new sensor_msgs::CameraInfo(*out.tag.second));
       info_out->header = in.header;
       camera_output_.publish(filtered, sensor_msgs::CameraInfo::ConstPtr(info_out));
+      publishFilledMask(in.header, *out.cloud, out.filled);
       statistics_.published((ros::Time::now() - in.header.stamp).toSec(), out.milliseconds);
       last_bandwidths_ = out.bandwidths;
     } catch (const std::exception& e) {

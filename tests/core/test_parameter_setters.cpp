@@ -59,6 +59,7 @@ accessors()
       RANGE_NLM_ACCESSORS(cross_frame_bandwidth, CrossFrameBandwidth),
       RANGE_NLM_ACCESSORS(patch_guide, PatchGuide),
       RANGE_NLM_ACCESSORS(evaluation, Evaluation),
+      RANGE_NLM_ACCESSORS(fill_holes, FillHoles),
   };
   return all;
 }

@@ -119,6 +119,7 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   last_bandwidths_ = run.bandwidths[current];
   last_outputs_.back().bandwidths = last_bandwidths_;
   last_outputs_.back().outliers_moved = run.outliers_moved;
+  last_outputs_.back().filled = run.filled;
   remember(t, true);
   last_outputs_.back().milliseconds = elapsed();
   return out;

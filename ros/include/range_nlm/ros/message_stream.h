@@ -53,6 +53,8 @@ public:
     double milliseconds = 0.0;
     /// Bandwidths the filter chose for it (first iteration); zero if it was not filtered.
     range_nlm::Bandwidths bandwidths;
+    /// 1 per point the hole filling gave a range (FilterParameters::fill_holes); empty when off.
+    std::vector<unsigned char> filled;
   };
 
   /// Throws std::invalid_argument for invalid settings.
@@ -113,7 +115,8 @@ private:
       tags_.push_back(*pushed);
     const auto& infos = stream_->lastOutputs();
     for (std::size_t i = 0; i < ready.size(); ++i) {
-      out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds, infos[i].bandwidths});
+      out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds, infos[i].bandwidths,
+                           infos[i].filled});
       tags_.pop_front();
     }
   }
