@@ -41,7 +41,8 @@ enum class HoleKind : unsigned char
   /// Beside a foreground's left edge on the background, as wide as the disparity jump: the part
   /// of the background the second camera (to the right) cannot see.
   shadow = 1,
-  /// A disc on a surface: a dark or shiny patch that returns no signal.
+  /// A disc on one surface (the pixels of the disc that see the surface its centre sees): a dark
+  /// or shiny patch that returns no signal.
   blob = 2
 };
 
@@ -63,6 +64,8 @@ struct Score
   /// Filled pixels off their true depth by more than 3 % of it (the other side of an edge, or a
   /// surface bridged across it), share of the filled pixels.
   double gross_share = 0.0;
+  /// Median absolute depth error of the filled pixels, millimetres.
+  double median_error_mm = 0.0;
   /// RMSE over the pixels every method filled, millimetres.
   double common_rmse_mm = 0.0;
   double milliseconds = 0.0;

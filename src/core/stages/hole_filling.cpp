@@ -267,11 +267,13 @@ inverseDepthSigma(const FillFrame& f, int i)
   return sigma / (dz * dz);
 }
 
-/// The border pixels of the farthest depth level with at least kMinLevelPixels pixels (levels
-/// split where the sorted inverse depths jump by more than the edge threshold), and that
-/// threshold in inverse depth (at the level's median); empty if no level has enough pixels.
+/// The border pixels of the depth level the hole is filled from, and the edge threshold in
+/// inverse depth (at the level's median). The border splits into levels where its sorted inverse
+/// depths jump by more than the edge threshold; levels of fewer than kMinLevelPixels pixels are
+/// stray points. Of the others, the farthest: a stereo or time-of-flight shadow lies on the
+/// background, beside the edge of the foreground that casts it. Empty if no level qualifies.
 std::vector<int>
-farthestLevel(const FillFrame& f, std::vector<int> border, const RayModel& rays, float& threshold)
+chooseLevel(const FillFrame& f, std::vector<int> border, const RayModel& rays, float& threshold)
 {
   // Farthest first: the smallest inverse depth.
   std::sort(border.begin(), border.end(), [&](int a, int b) { return f.w[a] < f.w[b] || (f.w[a] == f.w[b] && a < b); });
@@ -279,9 +281,8 @@ farthestLevel(const FillFrame& f, std::vector<int> border, const RayModel& rays,
     const float depth = 1.0f / f.w[i];
     return std::max(kEdgeSigmas * inverseDepthSigma(f, i), kEdgeFootprints * rays.pitch() / depth);
   };
-  std::size_t begin = 0;
-  while (begin < border.size()) {
-    std::size_t end = begin + 1;
+  for (std::size_t begin = 0, end = 0; begin < border.size(); begin = end) {
+    end = begin + 1;
     while (end < border.size() && f.w[border[end]] - f.w[border[end - 1]] <= edge(border[end]))
       ++end;
     if (end - begin >= static_cast<std::size_t>(kMinLevelPixels)) {
@@ -290,7 +291,6 @@ farthestLevel(const FillFrame& f, std::vector<int> border, const RayModel& rays,
       std::sort(level.begin(), level.end());
       return level;
     }
-    begin = end;
   }
   return {};
 }
@@ -426,7 +426,7 @@ fillHole(const FillFrame& f, const Hole& hole, const std::vector<unsigned char>&
   if (!fitRays(f, border, rays))
     return;
   float threshold = 0.0f;
-  const std::vector<int> level = farthestLevel(f, border, rays, threshold);
+  const std::vector<int> level = chooseLevel(f, border, rays, threshold);
   if (level.empty())
     return;
   float sigma = 0.0f;
