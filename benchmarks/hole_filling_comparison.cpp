@@ -43,7 +43,8 @@ punchShadows(SyntheticFrame& frame, const SceneOptions& scene, const Options& op
     const float far = depth(u - 1), near = depth(u);
     if (!std::isfinite(far) || !std::isfinite(near) || !(far > 1.05f * near))
       continue;
-    const int width = std::min(40, static_cast<int>(std::lround(scene.fx * options.baseline * (1.0 / near - 1.0 / far))));
+    const double disparity = scene.fx * options.baseline * (1.0 / near - 1.0 / far);
+    const int width = std::min(40, static_cast<int>(std::lround(disparity)));
     for (int k = u - width; k < u; ++k)
       if (k >= 0 && std::isfinite(depth(k)) && depth(k) > 1.05f * near) {
         const std::size_t i = std::size_t(v) * w + k;
@@ -150,12 +151,14 @@ punchHoles(SyntheticFrame& frame, const SceneOptions& scene, const Options& opti
       continue;
     ++placed;
     for (int v = std::max(0, cv - r); v <= std::min(h - 1, cv + r); ++v)
-      for (int u = std::max(0, cu - r); u <= std::min(w - 1, cu + r); ++u)
-        if ((u - cu) * (u - cu) + (v - cv) * (v - cv) <= r * r && frame.shape_index[std::size_t(v) * w + u] == surface &&
-            std::isfinite(frame.noisy[std::size_t(v) * w + u].z)) {
-          kind[std::size_t(v) * w + u] = HoleKind::blob;
-          makeHole(frame.noisy, std::size_t(v) * w + u);
+      for (int u = std::max(0, cu - r); u <= std::min(w - 1, cu + r); ++u) {
+        const std::size_t i = std::size_t(v) * w + u;
+        if ((u - cu) * (u - cu) + (v - cv) * (v - cv) <= r * r && frame.shape_index[i] == surface &&
+            std::isfinite(frame.noisy[i].z)) {
+          kind[i] = HoleKind::blob;
+          makeHole(frame.noisy, i);
         }
+      }
   }
   frame.noisy.is_dense = false;
   return kind;
@@ -209,8 +212,8 @@ printTable(const std::vector<SceneResult>& results, const Options& options, std:
       << " scenes (shadows beside depth edges, blobs on surfaces), against ground truth\n";
   for (const SceneResult& r : results) {
     out << "\n" << r.name << " (" << r.common << " pixels filled by every method)\n";
-    out << "| method | shadows filled | shadow RMSE mm | blobs filled | blob RMSE mm | gross | median error mm | common "
-           "RMSE mm | ms |\n";
+    out << "| method | shadows filled | shadow RMSE mm | blobs filled | blob RMSE mm | gross | median error mm "
+           "| common RMSE mm | ms |\n";
     out << "|---|---|---|---|---|---|---|---|---|\n";
     for (const Score& s : r.scores) {
       const auto share = [](std::size_t a, std::size_t b) {

@@ -188,7 +188,6 @@ fitRays(const FillFrame& f, const std::vector<int>& border, RayModel& rays)
     const double depth = double(g.z[i]) - f.viewpoint[2];
     if (!(depth > 0.0))
       return false;
-    // Centred coordinates keep the normal equations well conditioned.
     const double c[3] = {1.0, double(i % g.width), double(i / g.width)};
     const double rx = (double(g.x[i]) - f.viewpoint[0]) / depth, ry = (double(g.y[i]) - f.viewpoint[1]) / depth;
     for (int r = 0; r < 3; ++r) {
@@ -414,8 +413,8 @@ combine(const FillFrame& f, const std::vector<Candidate>& candidates, int i, flo
   return static_cast<float>(sum / weight);
 }
 
-/// Fills one hole (or piece of one) into `out` (marking `filled`); leaves it a hole where its border does not allow
-/// a fill or no candidate was found.
+/// Fills one hole (or piece of one) into `out` (marking `filled`); leaves it a hole where its
+/// border does not allow a fill or no candidate was found.
 void
 fillHole(const FillFrame& f, const Hole& hole, const std::vector<unsigned char>& active, Grid& out,
          std::vector<unsigned char>& filled)
