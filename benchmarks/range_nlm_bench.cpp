@@ -4,6 +4,7 @@
 // methods of a configuration taking turns (a warm-up call, then the timed one).
 #include "bench_support.h"
 #include "generalisation_comparison.h"
+#include "hole_filling_comparison.h"
 #include "peers.h"
 #include "quality_comparison.h"
 #include "real_noise_comparison.h"
@@ -553,7 +554,7 @@ bool
 oncePerCall(Stage stage)
 {
   return stage == Stage::outliers || stage == Stage::neighbour_frames || stage == Stage::dilation ||
-         stage == Stage::pyramid;
+         stage == Stage::pyramid || stage == Stage::hole_filling;
 }
 
 /// The breakdown's steps: the conversion, the phases runFilter went through (`stages`, in the
@@ -1188,7 +1189,19 @@ runComparison(const po::variables_map& vm)
   std::ostringstream sink;
   std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
   std::ostringstream report, json_text;
-  if (vm.count("generalisation")) {
+  if (vm.count("hole-filling")) {
+    holes::Options o;
+    o.threads = vm["threads"].as<int>();
+    o.fill_holes = vm["hole-filling-max"].as<int>();
+    const auto [w, h] = qualitySize(vm);
+    o.width = w, o.height = h;
+    const auto results = holes::run(o, log);
+    holes::printJson(results, o, json_text);
+    if (json)
+      holes::printJson(results, o, report);
+    else
+      holes::printTable(results, o, report);
+  } else if (vm.count("generalisation")) {
     generalisation::run(generalisationOptions(vm), log, report, &json_text);
     if (json)
       report.str(json_text.str());
@@ -1478,6 +1491,8 @@ run(int argc, char** argv)
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
     ("uncertainty-calibration", "instead of timing: whether the per-point uncertainty is calibrated: generated scenes of every sensor noise model (seed --seed, size --quality-size) filtered by the default with the uncertainty on, alone and as the middle frame of three; per decile of the predicted standard deviation the actual RMS error over the predicted RMS, all, flat and feature points")
     ("uncertainty-plot", po::value<std::string>()->default_value(""), "--uncertainty-calibration: also write the reliability diagram (predicted against actual RMS per decile, log-log, one colour per model) to this PNG")
+    ("hole-filling", "instead of timing: range_nlm's hole filling against librealsense's hole-filling filter (its three modes, reimplemented; on the raw frame and after range_nlm) on generated scenes with shadows beside depth edges and blobs punched out, against ground truth (frame size: --quality-size)")
+    ("hole-filling-max", po::value<int>()->default_value(24), "--hole-filling: range_nlm's --fill-holes")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on
   po::positional_options_description positional;
@@ -1486,7 +1501,7 @@ run(int argc, char** argv)
     return 0;
 
   if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation") ||
-      vm.count("uncertainty-calibration"))
+      vm.count("uncertainty-calibration") || vm.count("hole-filling"))
     runComparison(vm);
   else
     runTiming(settingsFrom(vm));

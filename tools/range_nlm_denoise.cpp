@@ -349,7 +349,7 @@ private:
   {
     try {
       writeResult(frame.input_path, frame.output_path, frame.loaded, *result.cloud, job_.output,
-                  result.info.uncertainty);
+                  result.info.uncertainty, result.info.filled);
     } catch (const std::bad_alloc&) {
       throw InputError("'" + frame.output_path + "': out of memory while writing the frame");
     }

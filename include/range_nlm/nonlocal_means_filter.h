@@ -46,6 +46,18 @@ public:
   /// deviation of each output point's error along its direction of movement, cloud units (metres),
   /// NaN for invalid points (docs/method.md, "Per-point uncertainty"). Empty when off.
   const std::vector<float>& getUncertainty() const { return workspace_.result().uncertainty; }
+  /// Indices of the points the last filter() call filled (FilterParameters::fill_holes): they
+  /// were invalid in the input and were given a range by the hole filling, not measured. Empty
+  /// when the hole filling is off.
+  pcl::Indices getFilledIndices() const
+  {
+    pcl::Indices indices;
+    const std::vector<unsigned char>& filled = workspace_.result().filled;
+    for (std::size_t i = 0; i < filled.size(); ++i)
+      if (filled[i])
+        indices.push_back(static_cast<pcl::index_t>(i));
+    return indices;
+  }
 
   /// Told where each phase of every filter() call begins and ends (see StageObserver, e.g. for
   /// progress or timing); null for none. Not owned.

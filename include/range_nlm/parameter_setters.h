@@ -48,6 +48,10 @@ public:
   /// give the same result to float precision.
   void setEvaluation(Evaluation e) { parameters_.evaluation = e; }
   Evaluation getEvaluation() const { return parameters_.evaluation; }
+  /// Widest hole (pixels) filled after the last pass, 0 = off (the default). See
+  /// FilterParameters::fill_holes.
+  void setFillHoles(int max_width) { parameters_.fill_holes = max_width; }
+  int getFillHoles() const { return parameters_.fill_holes; }
   /// Isolated outliers moved onto their neighbours' surface before filtering, in noise sigmas;
   /// 0 = off (default 10; paper preset 0). See FilterParameters::outlier_sigmas.
   void setOutlierSigmas(float sigmas) { parameters_.outlier_sigmas = sigmas; }

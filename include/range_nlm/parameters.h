@@ -201,6 +201,14 @@ struct FilterParameters
   /// uncertainty"); FilterRun::uncertainty, the filters' getUncertainty(). Off: no work for it and
   /// the same output. Default false.
   bool uncertainty = false;
+  /// Hole filling after the filter's last pass: every hole (an 8-connected region of invalid
+  /// pixels that does not touch the frame's border) at most this many pixels wide (the widest
+  /// of its pixels' shorter run of hole pixels along its row or its column) gets ranges from the
+  /// non-local candidates whose patches match its border, on its pixels' rays; a hole on a depth
+  /// edge takes the far side's surface, never a value between the sides (docs/method.md, "Hole
+  /// filling"). Filled points are reported (FilterRun::filled). 0 = off (the paper). 0 ... 64,
+  /// default 0.
+  int fill_holes = 0;
 
   /// Throws std::invalid_argument naming the first invalid parameter (in the order of the fields)
   /// and its value.

@@ -97,6 +97,9 @@ public:
     /// metres, NaN for invalid points (as NonLocalMeansFilter::getUncertainty). Empty when off,
     /// or when the frame was passed through unchanged.
     std::vector<float> uncertainty;
+    /// Points given a range by the hole filling (FilterParameters::fill_holes): 1 per filled
+    /// point, in the cloud's order; empty when the hole filling is off.
+    std::vector<unsigned char> filled;
   };
   /// One entry per frame returned by the last push() or flush(), in the same order.
   const std::vector<OutputInfo>& lastOutputs() const { return last_outputs_; }

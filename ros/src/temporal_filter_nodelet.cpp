@@ -64,6 +64,7 @@ TemporalFilterNodelet::advertise()
   const int queue = settings_.queue_size;
   // Published beside the filtered output while ~uncertainty is on and it has subscribers.
   uncertainty_output_ = private_node.advertise<sensor_msgs::Image>("uncertainty/image", queue);
+  filled_mask_ = private_node.advertise<sensor_msgs::Image>("filled/mask", queue);
   if (settings_.input == "points") {
     output_ = private_node.advertise<sensor_msgs::PointCloud2>(
         "output", queue, [this](const ros::SingleSubscriberPublisher&) { onConnectionChange(); },
@@ -181,12 +182,31 @@ TemporalFilterNodelet::publishClouds(const std::vector<CloudStream::Output>& rea
     try {
       output_.publish(sensor_msgs::PointCloud2::ConstPtr(pointCloud2WithXyz(*out.tag, *out.cloud)));
       publishUncertainty(out.tag->header, *out.cloud, out.uncertainty);
+      publishFilledMask(out.tag->header, *out.cloud, out.filled);
       statistics_.published((ros::Time::now() - out.tag->header.stamp).toSec(), out.milliseconds);
       last_bandwidths_ = out.bandwidths;
     } catch (const std::exception& e) {
       dropped("PointCloud2", out.tag->header, e.what());
     }
   }
+}
+
+void
+TemporalFilterNodelet::publishFilledMask(const std_msgs::Header& header, const Cloud& cloud,
+                                         const std::vector<unsigned char>& filled)
+{
+  if (filled.empty() || filled_mask_.getNumSubscribers() == 0)
+    return;
+  sensor_msgs::Image::Ptr mask(new sensor_msgs::Image);
+  mask->header = header;
+  mask->width = cloud.width;
+  mask->height = cloud.height;
+  mask->encoding = "mono8";
+  mask->step = cloud.width;
+  mask->data.resize(filled.size());
+  for (std::size_t i = 0; i < filled.size(); ++i)
+    mask->data[i] = filled[i] ? 255 : 0;
+  filled_mask_.publish(sensor_msgs::Image::ConstPtr(mask));
 }
 
 void
@@ -227,6 +247,7 @@ TemporalFilterNodelet::publishDepth(const std::vector<DepthStream::Output>& read
       info_out->header = in.header;
       camera_output_.publish(filtered, sensor_msgs::CameraInfo::ConstPtr(info_out));
       publishUncertainty(in.header, *out.cloud, out.uncertainty);
+      publishFilledMask(in.header, *out.cloud, out.filled);
       statistics_.published((ros::Time::now() - in.header.stamp).toSec(), out.milliseconds);
       last_bandwidths_ = out.bandwidths;
     } catch (const std::exception& e) {

@@ -293,6 +293,13 @@ normalAndMoveEntries()
       .help("also estimate each output point's standard deviation along its direction of movement, metres, from "
             "the filter's weights (an 'uncertainty' field in PCD output)")
       .cli("uncertainty").ros("uncertainty").pass("uncertainty"),
+    Entry("fill_holes", &P::fill_holes).unit("pixels").zeroMeans("off")
+      .range(between(0, 64, "must be 0 (off) ... 64 pixels"))
+      .docs("[hole filling](#hole-filling)")
+      .help("fill holes (invalid regions not touching the frame border) at most this many pixels wide from "
+            "candidates whose patches match the hole's border, never across a depth edge; filled points are "
+            "marked; 0 = off")
+      .cli("fill-holes").ros("fill_holes").pass("fill_holes"),
   };
   // clang-format on
 }

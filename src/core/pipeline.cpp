@@ -168,6 +168,8 @@ toString(Stage stage)
     return "offsets";
   case Stage::displacement:
     return "displacement";
+  case Stage::hole_filling:
+    return "hole filling";
   }
   return "?";
 }
@@ -254,6 +256,10 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   std::vector<const Grid*> frames = given;
   workspace.run.outliers_moved = 0; // every path below keeps it
   workspace.prior_sigma.clear();
+  // The hole filling reads the frame as given after the passes, which may take its grid over.
+  Grid as_given;
+  if (parameters.fill_holes > 0)
+    as_given = *given[center];
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
@@ -269,6 +275,13 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
   else
     detail::runOneScale(frames, center, parameters, viewpoint, active, workspace);
+  // After the last pass, so that the holes' borders are compared and carried over denoised.
+  workspace.run.filled.clear();
+  if (parameters.fill_holes > 0) {
+    detail::StageTracker stage(workspace.observer, 0);
+    stage.start(Stage::hole_filling);
+    detail::fillHoles(as_given, parameters, viewpoint, active, workspace);
+  }
 }
 
 void

@@ -60,6 +60,7 @@ accessors()
       RANGE_NLM_ACCESSORS(patch_guide, PatchGuide),
       RANGE_NLM_ACCESSORS(uncertainty, EstimateUncertainty),
       RANGE_NLM_ACCESSORS(evaluation, Evaluation),
+      RANGE_NLM_ACCESSORS(fill_holes, FillHoles),
   };
   return all;
 }

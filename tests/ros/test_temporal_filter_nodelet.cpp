@@ -285,6 +285,38 @@ TEST(RosNode, TheUncertaintyImageIsNotPublishedWhenOff)
   input.publish(toPointCloud2(*frame(0), 400, 1));
   ASSERT_TRUE(output.next()) << readLog(node.log());
   EXPECT_FALSE(sigma.next(0.5));
+TEST(RosNode, TheFilledMaskMarksExactlyThePointsTheHoleFillingGaveARange)
+{
+  ros::param::set("/rnlm_holes/search_window", 7);
+  ros::param::set("/rnlm_holes/fill_holes", 6);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_holes", "~input:=/rnlm_holes/in", "~output:=/rnlm_holes/out"},
+                    g_master->directory() + "/rnlm_holes.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/rnlm_holes/in", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/rnlm_holes/out");
+  Inbox<sensor_msgs::Image> mask("/rnlm_holes/filled/mask");
+  ASSERT_TRUE(waitFor([&] {
+    return input.getNumSubscribers() > 0 && output.publishers() > 0 && mask.publishers() > 0;
+  })) << readLog(node.log());
+  Cloud cloud = makeCloud(64, 48, plane(Eigen::Vector3d(0.1, -0.1, 1.0).normalized(), 1.5), 0.002, 7);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int v = 20; v < 23; ++v)
+    for (int u = 30; u < 33; ++u)
+      cloud(u, v) = pcl::PointXYZ(nan, nan, nan);
+  input.publish(toPointCloud2(cloud, 300, 1));
+  const auto out = output.next();
+  const auto marks = mask.next();
+  ASSERT_TRUE(out && marks) << readLog(node.log());
+  EXPECT_EQ(marks->header.stamp, out->header.stamp);
+  EXPECT_EQ(marks->encoding, "mono8");
+  ASSERT_EQ(marks->width, 64u);
+  ASSERT_EQ(marks->height, 48u);
+  const Cloud filtered = xyzOf(*out);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const bool filled = !std::isfinite(cloud[i].z) && std::isfinite(filtered[i].z);
+    EXPECT_EQ(marks->data[i], filled ? 255 : 0) << i;
+  }
+  EXPECT_TRUE(std::isfinite(filtered(31, 21).z));
 }
 
 TEST(RosNode, CentredWindowDelaysOutputByTheRadius)

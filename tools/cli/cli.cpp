@@ -437,6 +437,8 @@ stageStart(Stage stage)
     return 0.64;
   case Stage::displacement:
     return 0.98;
+  case Stage::hole_filling:
+    return 0.99;
   }
   return 0.0;
 }

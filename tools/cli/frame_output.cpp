@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -53,6 +54,19 @@ warnClamping(const std::string& output_path, const DepthClamping& clamping, doub
   if (clamping.below > 0)
     warning << clamping.below << " pixel(s) filtered to less than " << 0.5 / depth_scale << " m stored as 1";
   std::cerr << printable(warning.str()) << "\n" << std::flush;
+}
+
+/// The mask of the filled points as a 16-bit PNG (65535 where filled), as the depth beside it.
+void
+writeFilledMask(const std::string& path, const Cloud& result, const std::vector<unsigned char>& filled)
+{
+  DepthImage mask;
+  mask.width = static_cast<int>(result.width);
+  mask.height = static_cast<int>(result.height);
+  mask.values.resize(filled.size());
+  for (std::size_t i = 0; i < filled.size(); ++i)
+    mask.values[i] = filled[i] ? 65535 : 0;
+  writeDepthPng(path, mask);
 }
 
 } // namespace
@@ -166,9 +180,50 @@ setFloatField(pcl::PCLPointCloud2& blob, const std::string& name, const std::vec
   blob = std::move(out);
 }
 
+std::string
+filledMaskPath(const std::string& output_path)
+{
+  const std::size_t dot = output_path.size() >= 4 ? output_path.size() - 4 : output_path.size();
+  return output_path.substr(0, dot) + ".filled-mask.png";
+}
+
+void
+markFilled(pcl::PCLPointCloud2& blob, const std::vector<unsigned char>& filled)
+{
+  const std::size_t points = std::size_t(blob.width) * blob.height;
+  if (filled.size() != points)
+    throw std::invalid_argument("the filled mask has " + std::to_string(filled.size()) + " entries for " +
+                                std::to_string(points) + " points");
+  auto field = std::find_if(blob.fields.begin(), blob.fields.end(),
+                            [](const pcl::PCLPointField& f) { return f.name == "filled"; });
+  if (field != blob.fields.end() && (field->datatype != pcl::PCLPointField::UINT8 || field->count != 1))
+    throw std::invalid_argument("the cloud has a field 'filled' that is not one uint8");
+  if (field == blob.fields.end()) {
+    // Appended to every point: the other fields keep their bytes and offsets.
+    const std::uint32_t step = blob.point_step;
+    std::vector<std::uint8_t> data(points * (step + 1), 0);
+    for (std::size_t i = 0; i < points; ++i)
+      std::copy_n(&blob.data[i * step], step, &data[i * (step + 1)]);
+    pcl::PCLPointField f;
+    f.name = "filled";
+    f.offset = step;
+    f.datatype = pcl::PCLPointField::UINT8;
+    f.count = 1;
+    blob.fields.push_back(f);
+    blob.point_step = step + 1;
+    blob.row_step = blob.point_step * blob.width;
+    blob.data.swap(data);
+    field = blob.fields.end() - 1;
+  }
+  for (std::size_t i = 0; i < points; ++i)
+    if (filled[i])
+      blob.data[i * blob.point_step + field->offset] = 1;
+}
+
 void
 writeResult(const std::string& input_path, const std::string& output_path, LoadedCloud& loaded, const Cloud& result,
-            const OutputOptions& out, const std::vector<float>& uncertainty)
+            const OutputOptions& out, const std::vector<float>& uncertainty,
+            const std::vector<unsigned char>& filled)
 {
   // A frame passed through unfiltered has no estimate: NaN everywhere.
   std::vector<float> sigma;
@@ -186,6 +241,8 @@ writeResult(const std::string& input_path, const std::string& output_path, Loade
       warnClamping(output_path, clamping, out.depth_scale);
     if (out.uncertainty)
       writeFloatImage(uncertaintyImagePath(output_path), sigma, int(result.width), int(result.height));
+    if (!filled.empty())
+      writeFilledMask(filledMaskPath(output_path), result, filled);
     return;
   }
   if (out.colorize) {
@@ -207,6 +264,13 @@ writeResult(const std::string& input_path, const std::string& output_path, Loade
   writeXyzToBlob(result, loaded.blob);
   if (out.uncertainty)
     setFloatField(loaded.blob, "uncertainty", sigma);
+  if (!filled.empty()) {
+    try {
+      markFilled(loaded.blob, filled);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("'" + output_path + "': " + e.what());
+    }
+  }
   saveCloudAtomic(output_path, loaded.blob, loaded.origin, loaded.orientation);
 }
 

@@ -58,11 +58,23 @@ outputOptionsFrom(const boost::program_options::variables_map& vm, bool single, 
 /// `loaded` takes the new points). A PNG depth that filtering moved just past the 16-bit range is
 /// clamped, with a warning on stderr, unless the input's depths never fitted (then it throws).
 /// With out.uncertainty, `uncertainty` (one value per point, else NaN everywhere: a frame passed
-/// through unfiltered) is written too.
+/// through unfiltered) is written too. `filled` (one entry per point, empty when the hole filling
+/// is off) marks the points the hole filling gave a range: a PCD output gets a uint8 field
+/// `filled` (1 = filled; an input's own `filled` field is kept and added to), a PNG output a mask
+/// image beside it (filledMaskPath(output_path), 65535 where filled, 0 elsewhere).
 void
 writeResult(const std::string& input_path, const std::string& output_path, io::LoadedCloud& loaded,
             const pcl::PointCloud<pcl::PointXYZ>& result, const OutputOptions& out,
-            const std::vector<float>& uncertainty = {});
+            const std::vector<float>& uncertainty = {}, const std::vector<unsigned char>& filled = {});
+
+/// The mask image of the filled points beside a PNG output: "NAME.png" -> "NAME.filled-mask.png".
+std::string
+filledMaskPath(const std::string& output_path);
+
+/// Sets the uint8 field `filled` of `blob` (appended if it has none) to 1 where `filled` is set,
+/// keeping the 1s it already holds.
+void
+markFilled(pcl::PCLPointCloud2& blob, const std::vector<unsigned char>& filled);
 
 } // namespace tools
 } // namespace range_nlm

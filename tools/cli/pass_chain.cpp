@@ -39,6 +39,12 @@ PassChain::take(std::size_t level, const std::vector<TemporalStream<pcl::PointXY
     if (level > 0) {
       o.info.milliseconds += before.milliseconds;
       o.info.outliers_moved += before.outliers_moved;
+      // A point an earlier pass filled stays marked: a later pass takes it for a measured one.
+      if (o.info.filled.empty())
+        o.info.filled = before.filled;
+      else
+        for (std::size_t k = 0; k < before.filled.size() && k < o.info.filled.size(); ++k)
+          o.info.filled[k] |= before.filled[k];
       o.info.bandwidths = before.bandwidths;
       if (!before.problem.empty())
         o.info.problem = before.problem;

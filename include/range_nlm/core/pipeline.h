@@ -306,6 +306,10 @@ struct FilterRun
   /// error along its direction of movement (the normal, or the ray along the line of sight),
   /// metres; NaN where the point is invalid. Empty otherwise.
   std::vector<float> uncertainty;
+  /// Hole filling (FilterParameters::fill_holes): 1 for every point of `output` that was invalid
+  /// in the current frame and was given a range by the hole filling, 0 elsewhere; empty when the
+  /// hole filling is off.
+  std::vector<unsigned char> filled;
 };
 
 /// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.
@@ -344,10 +348,12 @@ enum class Stage
   /// computeOffsets.
   offsets,
   /// applyOffsets.
-  displacement
+  displacement,
+  /// The hole filling (FilterParameters::fill_holes), once per call after the last pass.
+  hole_filling
 };
-/// Number of Stage values (displacement is the last).
-constexpr int kStageCount = static_cast<int>(Stage::displacement) + 1;
+/// Number of Stage values (hole_filling is the last).
+constexpr int kStageCount = static_cast<int>(Stage::hole_filling) + 1;
 /// A short name of the stage ("normals", "offsets", ...).
 const char*
 toString(Stage stage);

@@ -120,6 +120,7 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   last_outputs_.back().bandwidths = last_bandwidths_;
   last_outputs_.back().outliers_moved = run.outliers_moved;
   last_outputs_.back().uncertainty = run.uncertainty;
+  last_outputs_.back().filled = run.filled;
   remember(t, true);
   last_outputs_.back().milliseconds = elapsed();
   return out;

@@ -154,6 +154,17 @@ propagateUncertainty(FrameContext& ctx);
 /// workspace.run.uncertainty. (uncertainty.cpp)
 void
 uncertaintyAlongMoves(FrameContext& ctx, Displacement displacement);
+// Once per call, after the last pass (runFilter).
+
+/// FilterParameters::fill_holes: the holes of workspace.run.output (8-connected regions of
+/// invalid pixels, not touching the frame's border, active per `active`) at most fill_holes
+/// pixels wide get a range each from the non-local candidates whose patches match the hole's
+/// border on its farthest depth level, on the pixel's ray; sets workspace.run.filled. The edge
+/// and candidate scales come from the noise profile of `input`, the frame as given.
+/// (hole_filling.cpp)
+void
+fillHoles(const Grid& input, const FilterParameters& parameters, const Viewpoint& viewpoint,
+          const std::vector<unsigned char>& active, Workspace& workspace);
 
 } // namespace detail
 } // namespace range_nlm

@@ -56,6 +56,8 @@ public:
     /// With range_nlm::FilterParameters::uncertainty: its per-point standard deviation along
     /// the moves, metres, row-major, NaN at invalid points; empty otherwise.
     std::vector<float> uncertainty;
+    /// 1 per point the hole filling gave a range (FilterParameters::fill_holes); empty when off.
+    std::vector<unsigned char> filled;
   };
 
   /// Throws std::invalid_argument for invalid settings.
@@ -117,7 +119,7 @@ private:
     const auto& infos = stream_->lastOutputs();
     for (std::size_t i = 0; i < ready.size(); ++i) {
       out.push_back(Output{tags_.front(), ready[i], infos[i].problem, infos[i].milliseconds, infos[i].bandwidths,
-                           infos[i].uncertainty});
+                           infos[i].uncertainty, infos[i].filled});
       tags_.pop_front();
     }
   }

@@ -9,6 +9,9 @@
 ///   ~input = "depth": subscribes `~depth/image` (16UC1 mm or 32FC1 m) with its
 ///     `~depth/camera_info` through image_transport's CameraSubscriber (the two paired by stamp),
 ///     publishes `~depth_filtered/image` and `~depth_filtered/camera_info`.
+/// With the hole filling on (~fill_holes > 0), `~filled/mask` (sensor_msgs/Image, mono8, stamped
+/// as the output: 255 where a point was filled, 0 where it was measured) is published for every
+/// output while it has subscribers.
 /// The input is subscribed only while someone subscribes to the output.
 /// Parameters (private): node_settings.h; a missing, misspelt or invalid one makes onInit throw,
 /// so that `nodelet load` fails. Live changes: parameter_reconfigure.h. Diagnostics on
@@ -63,6 +66,8 @@ private:
   void restartStreams();
   void publishClouds(const std::vector<CloudStream::Output>& ready);
   void publishDepth(const std::vector<DepthStream::Output>& ready);
+  /// The mask of the filled points of one output, if the hole filling is on and someone listens.
+  void publishFilledMask(const std_msgs::Header& header, const Cloud& cloud, const std::vector<unsigned char>& filled);
   void dropped(const char* what, const std_msgs::Header& header, const std::string& why);
   /// ~uncertainty/image: the frame's per-point uncertainty, when it has one and someone listens.
   void publishUncertainty(const std_msgs::Header& header, const Cloud& cloud, const std::vector<float>& sigma);
@@ -86,6 +91,7 @@ private:
   ros::Publisher output_;
   image_transport::CameraPublisher camera_output_;
   ros::Publisher uncertainty_output_;
+  ros::Publisher filled_mask_;
   std::unique_ptr<ParameterReconfigure> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;
