@@ -27,7 +27,8 @@
 /// move the point far along its ray. The move is split into its part along the ray, kept as it
 /// is, and its part across the ray, m_across, which the plane carries onto the ray; at a grazing
 /// angle |cos| is taken as min_cos there, so that this part moves the point along its ray by at
-/// most |m_across| / min_cos (as the filter's own line-of-sight move is bounded). Where no plane
+/// most |m_across| / min_cos (as the filter's own line-of-sight move is bounded): a point moves
+/// along its ray by at most |m| sqrt(1 + 1 / min_cos^2), 3.5 |m| at the default. Where no plane
 /// fits (fewer than 6 points on the point's side, or all on a line) only the part along the ray
 /// is kept: the point of the ray nearest to p'.
 #pragma once
