@@ -605,8 +605,12 @@ medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud)
   return z.empty() ? 0.0 : median(std::move(z));
 }
 
-pcl::PointCloud<pcl::PointXYZ>
-loadXyzFrame(const std::string& path)
+namespace
+{
+/// The intrinsics of a real frame: for a depth PNG those of the intrinsics.txt beside it or in
+/// its parent folder, else the defaults.
+DepthIntrinsics
+frameIntrinsics(const std::string& path)
 {
   namespace fs = std::filesystem;
   DepthIntrinsics intrinsics;
@@ -618,7 +622,45 @@ loadXyzFrame(const std::string& path)
     else if (fs::exists(above))
       intrinsics = readIntrinsics(above.string());
   }
-  return io::xyzFromBlob(io::loadFrame(path, intrinsics), path);
+  return intrinsics;
+}
+} // namespace
+
+pcl::PointCloud<pcl::PointXYZ>
+loadXyzFrame(const std::string& path)
+{
+  return io::xyzFromBlob(io::loadFrame(path, frameIntrinsics(path)), path);
+}
+
+double
+frameDepthScale(const std::string& path)
+{
+  return frameIntrinsics(path).depth_scale;
+}
+
+pcl::PointCloud<pcl::PointXYZ>
+depthImageOutput(const pcl::PointCloud<pcl::PointXYZ>& input, const pcl::PointCloud<pcl::PointXYZ>& filtered,
+                 double depth_scale, bool z_only)
+{
+  DepthClamping clamping;
+  const DepthImage image = z_only ? cloudToDepthImage(filtered, depth_scale, &clamping)
+                                  : cloudToDepthImage(input, filtered, depth_scale, &clamping);
+  pcl::PointCloud<pcl::PointXYZ> out = filtered;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    pcl::PointXYZ& o = out[i];
+    if (image.values[i] == 0) {
+      o.x = o.y = o.z = nan;
+      continue;
+    }
+    // The ray of the input point (of the filtered one where the input has none).
+    const pcl::PointXYZ& p = std::isfinite(input[i].z) && input[i].z != 0.0f ? input[i] : filtered[i];
+    const double scale = image.values[i] / depth_scale / p.z;
+    o.x = static_cast<float>(p.x * scale);
+    o.y = static_cast<float>(p.y * scale);
+    o.z = static_cast<float>(image.values[i] / depth_scale);
+  }
+  return out;
 }
 
 void

@@ -132,6 +132,21 @@ medianDepth(const pcl::PointCloud<pcl::PointXYZ>& cloud);
 pcl::PointCloud<pcl::PointXYZ>
 loadXyzFrame(const std::string& path);
 
+/// The depth scale (values per metre) a depth-image output of the frame `path` is written with:
+/// that of the intrinsics loadXyzFrame reads for a depth PNG, else range_nlm_denoise's default
+/// (--depth-scale, DepthIntrinsics's 5000).
+double
+frameDepthScale(const std::string& path);
+
+/// What a depth-image output holds of the filtered frame `filtered` of `input`, read back: the
+/// 16-bit image at `depth_scale` (re-projected onto the rays, cloudToDepthImage(input, filtered,
+/// ...), or with `z_only` the filtered z as it is), each value back-projected onto the ray of its
+/// input point (as a reader with the frame's intrinsics does). Depths beyond the 16-bit range
+/// are clamped as range_nlm_denoise clamps them.
+pcl::PointCloud<pcl::PointXYZ>
+depthImageOutput(const pcl::PointCloud<pcl::PointXYZ>& input, const pcl::PointCloud<pcl::PointXYZ>& filtered,
+                 double depth_scale, bool z_only = false);
+
 /// Sets one field of `p` from "NAME=VALUE", NAME a field of the parameter registry (the field
 /// table of docs/method.md), and checks it against its range. Throws std::invalid_argument
 /// saying what is wrong (no such field, a bad or out-of-range value).

@@ -78,6 +78,33 @@ keptByBoth(const Cloud& result, const Cloud& other)
   return both;
 }
 
+/// "+0.4 %": how much larger `png` is than `pcd`.
+std::string
+excess(double png, double pcd)
+{
+  return pcd > 0.0 ? (png >= pcd ? "+" : "") + fixed(100.0 * (png / pcd - 1.0), 1) + " %" : "-";
+}
+
+/// The depth-image outputs of one filtered frame, read back: re-projected onto the rays (what
+/// range_nlm_denoise --output-format png and the ROS depth topic write) and z only (the encoding
+/// of a cloud already on its rays).
+struct PngOutputs
+{
+  Cloud reprojected, z_only;
+};
+
+PngOutputs
+pngOutputs(const Cloud& input, const Cloud& filtered, double depth_scale)
+{
+  return {bench::depthImageOutput(input, filtered, depth_scale), bench::depthImageOutput(input, filtered, depth_scale, true)};
+}
+
+const char* const kPngTableNote =
+    "PNG: the filtered cloud through the depth-image output (each point re-projected onto its pixel's ray, "
+    "16-bit at the frame's depth scale: its intrinsics.txt for a depth PNG, 5000 per metre, range_nlm_denoise's "
+    "default, otherwise) and read back, scored as the PCD output; z only: the same image of the filtered z as it "
+    "is (the encoding before the re-projection).";
+
 } // namespace
 
 std::vector<std::pair<std::string, FilterParameters>>
@@ -158,6 +185,8 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
   // 1. Generated scenes with ground truth.
   peer_grids::WinTally tally;
   std::ostringstream like_for_like; // rows of the scenes on which MLS's best-balanced setting lost points
+  std::ostringstream png_generated; // PCD against PNG output of every range_nlm setting
+  const double generated_depth_scale = DepthIntrinsics().depth_scale;
   report << "## Generated scenes with sensor noise (point-to-plane RMSE against ground truth, mm)\n\n"
          << "FastBilateral and MLS: the setting of each grid with the smallest flat + feature RMSE on that scene "
             "(best-balanced).\n\n"
@@ -208,6 +237,15 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
         j["noisy"] = {noisy.flat_rmse * 1e3, noisy.feature_rmse * 1e3};
         for (const ScoredRow& r : rows)
           if (r.family == "range_nlm") {
+            const PngOutputs png = pngOutputs(frame.noisy, r.result, generated_depth_scale);
+            const FrameMetrics p = evaluateFrame(frame.truth, png.reprojected, &frame.noisy, eval);
+            const FrameMetrics z = evaluateFrame(frame.truth, png.z_only, &frame.noisy, eval);
+            png_generated << "| " << name << " | " << r.setting << " | " << mm(r.m.flat_rmse) << " / "
+                          << mm(r.m.feature_rmse) << " | " << mm(p.flat_rmse) << " / " << mm(p.feature_rmse) << " | "
+                          << excess(p.flat_rmse, r.m.flat_rmse) << " | " << mm(z.flat_rmse) << " / "
+                          << mm(z.feature_rmse) << " |\n";
+            j["png"][r.setting] = {p.flat_rmse * 1e3, p.feature_rmse * 1e3};
+            j["png z only"][r.setting] = {z.flat_rmse * 1e3, z.feature_rmse * 1e3};
             const bool win = tally.add(r.setting, r.m, fb_best->m, mls_best ? &mls_best->m : nullptr);
             report << mm(r.m.flat_rmse) << " / " << mm(r.m.feature_rmse) << (win ? " (wins)" : "") << " | ";
             j[r.setting] = {r.m.flat_rmse * 1e3, r.m.feature_rmse * 1e3};
@@ -240,7 +278,13 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
               "MLS best-balanced |\n|---|---|---|---|---|\n"
            << like_for_like.str();
 
+  report << "\n### PNG output against PCD output\n\n" << kPngTableNote
+         << " Flat / feature RMSE against ground truth (mm).\n\n| scene | setting | PCD | PNG | PNG flat against "
+            "PCD | z only |\n|---|---|---|---|---|---|\n"
+         << png_generated.str();
+
   // 2. Real frames: residual of the raw frame's planar regions.
+  std::ostringstream png_real; // PCD against PNG output of every range_nlm setting
   const std::vector<Smoother> fb_real{peer_grids::fastBilateral(5.0f, 0.03f), peer_grids::fastBilateral(10.0f, 0.05f),
                                       peer_grids::fastBilateral(15.0f, 0.05f)};
   if (!options.real_frames.empty()) {
@@ -267,10 +311,22 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
     j["raw"] = {before.interior_rms * 1e3, before.border_rms * 1e3};
     log << name << ": raw " << mm(before.interior_rms) << " / " << mm(before.border_rms);
     std::vector<Cloud> results;
+    const double depth_scale = bench::frameDepthScale(path);
     for (const auto* family : {&ours, &fb_real})
       for (const Smoother& s : *family) {
         results.push_back(s.apply(raw));
         const PlanarResidual r = planarResidual(regions, results.back());
+        if (family == &ours) {
+          const PngOutputs png = pngOutputs(raw, results.back(), depth_scale);
+          const PlanarResidual p = planarResidual(regions, png.reprojected);
+          const PlanarResidual z = planarResidual(regions, png.z_only);
+          png_real << "| " << name << " | " << s.setting << " | " << mm(before.interior_rms) << " / "
+                   << mm(before.border_rms) << " | " << mm(r.interior_rms) << " / " << mm(r.border_rms) << " | "
+                   << mm(p.interior_rms) << " / " << mm(p.border_rms) << " | " << excess(p.interior_rms, r.interior_rms)
+                   << " | " << mm(z.interior_rms) << " / " << mm(z.border_rms) << " |\n";
+          j["png " + s.setting] = {p.interior_rms * 1e3, p.border_rms * 1e3};
+          j["png z only " + s.setting] = {z.interior_rms * 1e3, z.border_rms * 1e3};
+        }
         report << mm(r.interior_rms) << " / " << mm(r.border_rms) << (r.points_lost ? " (" + std::to_string(r.points_lost) + " lost)" : "") << " | ";
         j[s.family + " " + s.setting] = {r.interior_rms * 1e3, r.border_rms * 1e3, r.points_lost};
         log << "; " << s.family << " " << s.setting << " " << mm(r.interior_rms) << " / " << mm(r.border_rms);
@@ -291,7 +347,14 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
     }
   }
 
+  if (!png_real.str().empty())
+    report << "\n### Real frames: PNG output against PCD output\n\n" << kPngTableNote
+           << " Residual to the raw frame's planes, interior / border band (mm).\n\n| frame | setting | raw | PCD | "
+              "PNG | PNG interior against PCD | z only |\n|---|---|---|---|---|---|---|\n"
+           << png_real.str();
+
   // 3. Static real sequences: jitter of the frames filtered one by one.
+  std::ostringstream png_jitter; // PCD against PNG output of every range_nlm setting
   if (!options.static_sequences.empty()) {
     report << "\n## Static real sequences: median per-pixel range jitter (sample std over the frames, mm), frames "
               "filtered one by one\n\n| sequence | raw | ";
@@ -315,12 +378,27 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
     nlohmann::json& j = out["jitter"][name];
     j["raw"] = before.median * 1e3;
     log << name << ": raw " << mm(before.median);
+    const double depth_scale = bench::frameDepthScale(sequence.front());
     for (const auto* family : {&ours, &fb_real})
       for (const Smoother& s : *family) {
-        JitterEvaluator e;
-        for (const Cloud& c : raw)
-          e.add(s.apply(c));
+        JitterEvaluator e, png, z_only;
+        for (const Cloud& c : raw) {
+          const Cloud result = s.apply(c);
+          if (family == &ours) {
+            const PngOutputs outputs = pngOutputs(c, result, depth_scale);
+            png.add(outputs.reprojected);
+            z_only.add(outputs.z_only);
+          }
+          e.add(result);
+        }
         const TemporalJitter t = e.jitter();
+        if (family == &ours) {
+          const TemporalJitter p = png.jitter(), z = z_only.jitter();
+          png_jitter << "| " << name << " | " << s.setting << " | " << mm(before.median) << " | " << mm(t.median)
+                     << " | " << mm(p.median) << " | " << excess(p.median, t.median) << " | " << mm(z.median) << " |\n";
+          j["png " + s.setting] = p.median * 1e3;
+          j["png z only " + s.setting] = z.median * 1e3;
+        }
         report << mm(t.median) << " | ";
         j[s.family + " " + s.setting] = t.median * 1e3;
         log << "; " << s.family << " " << s.setting << " " << mm(t.median);
@@ -328,6 +406,11 @@ run(const Options& options, std::ostream& log, std::ostream& report, std::ostrea
     report << "\n";
     log << std::endl;
   }
+  if (!png_jitter.str().empty())
+    report << "\n### Static real sequences: PNG output against PCD output\n\n" << kPngTableNote
+           << " Median per-pixel range jitter, frames filtered one by one (mm).\n\n| sequence | setting | raw | PCD | "
+              "PNG | PNG against PCD | z only |\n|---|---|---|---|---|---|---|\n"
+           << png_jitter.str();
   if (json)
     *json << out.dump() << "\n";
 }

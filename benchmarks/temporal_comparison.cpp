@@ -335,17 +335,27 @@ runStatic(const Options& options, std::ostream& log)
       name << "FastBilateral per frame (sigma_s " << sigma_s << ", sigma_r " << sigma_r << ")";
       add(name.str(), frames);
     }
-    add("range_nlm per frame (default)", perFrame(raw, parameters));
+    // range_nlm's rows again as its depth-image output holds them (read back onto the rays).
+    const double depth_scale = bench::frameDepthScale(sequence.front());
+    auto add_with_png = [&](const std::string& method, const std::vector<Cloud>& outputs) {
+      add(method, outputs);
+      std::vector<Cloud> png;
+      for (std::size_t k = 0; k < outputs.size(); ++k)
+        png.push_back(bench::depthImageOutput(*raw[k], outputs[k], depth_scale));
+      add(method + ", PNG output", png);
+    };
+    add_with_png("range_nlm per frame (default)", perFrame(raw, parameters));
     for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::causal, TemporalWindow::recursive})
-      add(std::string("range_nlm temporal, radius 1") + windowName(window), rangeNlmSequence(raw, window, parameters));
+      add_with_png(std::string("range_nlm temporal, radius 1") + windowName(window),
+                   rangeNlmSequence(raw, window, parameters));
     // A camera known to be static (range_nlm_denoise --cross-frame temporal): the cross-frame
     // bandwidths always follow the frame-to-frame noise, where the guarded default takes
     // pose5's low-frequency offsets between frames for motion.
     FilterParameters static_camera = parameters;
     static_camera.cross_frame_bandwidth = CrossFrameBandwidth::temporal;
     for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::recursive})
-      add(std::string("range_nlm temporal, radius 1") + windowName(window) + ", cross-frame temporal",
-          rangeNlmSequence(raw, window, static_camera));
+      add_with_png(std::string("range_nlm temporal, radius 1") + windowName(window) + ", cross-frame temporal",
+                   rangeNlmSequence(raw, window, static_camera));
     for (const auto& p : librealsenseSettings())
       add(librealsenseName(p), librealsenseSequence(raw, p));
     results.push_back(std::move(result));

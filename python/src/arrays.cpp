@@ -2,6 +2,8 @@
 // conversions (depthImageToCloud, cloudToDepthImage, ...), the ones range_nlm_denoise uses.
 #include "bindings.h"
 
+#include <range_nlm/io/ray_reprojection.h>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -170,13 +172,14 @@ resultOf(const Cloud& result, const FrameFormat& format)
     // A depth image's input always fitted 16 bits, so a depth filtering moved just past them is
     // clamped with a warning, as range_nlm_denoise's PNG output does.
     DepthClamping clamping;
-    const DepthImage image = cloudToDepthImage(result, format.depth_scale, &clamping);
+    const DepthImage image = cloudToDepthImage(*format.input, result, format.depth_scale, &clamping);
     warnClamping(clamping, format.depth_scale);
     py::array_t<std::uint16_t> out({height, width});
     std::memcpy(out.mutable_data(), image.values.data(), image.values.size() * sizeof(std::uint16_t));
     return std::move(out);
   }
-  const std::vector<double> depths = cloudToDepthValues(result, format.depth_scale);
+  // Each point on its pixel's ray first, as the 16-bit encoding does.
+  const std::vector<double> depths = cloudToDepthValues(reprojectOntoRays(*format.input, result), format.depth_scale);
   auto fill = [&](auto out) {
     auto* data = out.mutable_data();
     for (std::size_t i = 0; i < depths.size(); ++i)

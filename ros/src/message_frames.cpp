@@ -1,6 +1,7 @@
 #include <range_nlm/ros/message_frames.h>
 
 #include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/ray_reprojection.h>
 
 #include <sensor_msgs/image_encodings.h>
 
@@ -293,6 +294,16 @@ uncertaintyImage(const std_msgs::Header& header, std::uint32_t width, std::uint3
   out->data.resize(sigma.size() * sizeof(float));
   std::memcpy(out->data.data(), sigma.data(), out->data.size());
   return out;
+}
+
+sensor_msgs::Image::Ptr
+filteredDepthImage(const sensor_msgs::Image& image, const sensor_msgs::CameraInfo& info, const Cloud& filtered)
+{
+  const Cloud::Ptr input = cloudFromDepthImage(image, info);
+  if (filtered.width != input->width || filtered.height != input->height)
+    throw InvalidMessage("filtered cloud of " + sizeText(filtered.width, filtered.height) + " for a depth image of " +
+                         sizeText(image.width, image.height));
+  return depthImageWithZ(image, range_nlm::reprojectOntoRays(*input, filtered));
 }
 
 bool

@@ -240,7 +240,7 @@ TemporalFilterNodelet::publishDepth(const std::vector<DepthStream::Output>& read
       continue;
     }
     try {
-      sensor_msgs::Image::ConstPtr filtered = depthImageWithZ(in, *out.cloud);
+      sensor_msgs::Image::ConstPtr filtered = filteredDepthImage(in, *out.tag.second, *out.cloud);
       // The image's own CameraInfo, stamped like it, so that consumers pairing them by stamp
       // (depth_image_proc, rviz's DepthCloud) match the two.
       sensor_msgs::CameraInfo::Ptr info_out(new sensor_msgs::CameraInfo(*out.tag.second));

@@ -1,6 +1,7 @@
 // 16-bit depth PNGs <-> organized clouds, the intrinsics.txt reader and the libpng wrappers.
 #include <range_nlm/io/depth_image.h>
 #include <range_nlm/io/pcd_file.h>
+#include <range_nlm/io/ray_reprojection.h>
 
 #include "output_file.h"
 
@@ -562,6 +563,15 @@ cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scal
   return image;
 }
 
+DepthImage
+cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& input, const pcl::PointCloud<pcl::PointXYZ>& filtered,
+                  double depth_scale, DepthClamping* clamping)
+{
+  if (!(std::isfinite(depth_scale) && depth_scale > 0.0)) // before the re-projection's work
+    throw std::invalid_argument("depth_scale must be a positive number, got " + numberText(depth_scale));
+  return cloudToDepthImage(reprojectOntoRays(input, filtered), depth_scale, clamping);
+}
+
 pcl::PointCloud<pcl::PointXYZ>
 loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics, const io::MemoryBudget& budget)
 {
@@ -580,6 +590,19 @@ saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& clou
   DepthImage image;
   try {
     image = cloudToDepthImage(cloud, depth_scale, clamping);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(quoted(path) + ": " + e.what());
+  }
+  writeDepthPng(path, image);
+}
+
+void
+saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& input,
+             const pcl::PointCloud<pcl::PointXYZ>& filtered, double depth_scale, DepthClamping* clamping)
+{
+  DepthImage image;
+  try {
+    image = cloudToDepthImage(input, filtered, depth_scale, clamping);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(quoted(path) + ": " + e.what());
   }

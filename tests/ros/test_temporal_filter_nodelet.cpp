@@ -1,13 +1,15 @@
 // The nodelet against a real ROS master: range_nlm_node and a nodelet manager with the plugin
 // loaded, fed PointCloud2 and depth image messages; outputs equal the library's TemporalStream on
-// the same frames, bad messages are dropped with a log line naming their stamp. Also: private
-// topics, lazy subscription, reconfiguration between frames, diagnostics, depth and CameraInfo
-// paired by stamp, parameters read by type, misspelt parameters and a failed nodelet load.
+// the same frames (the depth topic also range_nlm_denoise's PNG output), bad messages are
+// dropped with a log line naming their stamp. Also: private topics, lazy subscription,
+// reconfiguration between frames, diagnostics, depth and CameraInfo paired by stamp, parameters
+// read by type, misspelt parameters and a failed nodelet load.
 #include "parameter_values.h"
 #include "ros_test_support.h"
 #include "test_support.h"
 
 #include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/ray_reprojection.h>
 #include <range_nlm/parameter_registry.h>
 #include <range_nlm/ros/node_settings.h>
 #include <range_nlm/temporal_stream.h>
@@ -25,6 +27,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -530,6 +533,30 @@ depth32(const Cloud& cloud, std::uint32_t sec)
   return image;
 }
 
+/// Frame k of a noisy tilted scene with a depth step and holes, w x h: moves along the normals
+/// of a frame filtered alone run across the rays.
+Cloud::Ptr
+tiltedFrame(int k, int w = 64, int h = 48)
+{
+  Cloud::Ptr cloud(new Cloud(
+      makeCloud(w, h, [w](double a, double, int u, int) { return (u < w / 2 ? 1.5 : 2.0) / (1.0 + 0.6 * a); },
+                0.004, 1000 + k)));
+  punchHoles(*cloud, 0.03, 2000 + k);
+  return cloud;
+}
+
+/// The depth values of a 16UC1 message.
+DepthImage
+depthValues(const sensor_msgs::Image& image)
+{
+  DepthImage depth;
+  depth.width = int(image.width);
+  depth.height = int(image.height);
+  depth.values.resize(std::size_t(image.width) * image.height);
+  std::memcpy(depth.values.data(), image.data.data(), depth.values.size() * 2);
+  return depth;
+}
+
 sensor_msgs::CameraInfo
 cameraInfo(int w, int h, std::uint32_t sec)
 {
@@ -572,7 +599,8 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   })) << readLog(manager.log())
       << readLog(loader.log());
 
-  // 16UC1 millimetres: the library's back-projection, stream and encoding.
+  // 16UC1 millimetres: the library's back-projection, stream and encoding of a filtered frame
+  // (each point re-projected onto its pixel's ray).
   const int w = 64, h = 48;
   const int w2 = 40, h2 = 30;
   DepthIntrinsics intrinsics;
@@ -581,8 +609,9 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   intrinsics.cy = (h - 1) / 2.0;
   intrinsics.depth_scale = 1000.0;
   TemporalStream<pcl::PointXYZ> stream16(1, TemporalWindow::causal, testParameters());
+  std::vector<DepthImage> inputs, outputs;
   for (int k = 0; k < 3; ++k) {
-    const sensor_msgs::Image in = depth16(*frame(k), 200 + k);
+    const sensor_msgs::Image in = depth16(*tiltedFrame(k), 200 + k);
     // Each image is paired with the CameraInfo of its stamp, whichever came last: here the
     // next image's (of another size) comes before this one's.
     if (k == 2)
@@ -604,18 +633,32 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
     EXPECT_EQ(info->header.stamp, in.header.stamp);
     EXPECT_EQ(out->encoding, "16UC1");
     EXPECT_EQ(out->step, in.step);
-    DepthImage image;
-    image.width = w;
-    image.height = h;
-    image.values.resize(std::size_t(w) * h);
-    std::memcpy(image.values.data(), in.data.data(), in.data.size());
-    const auto ready = stream16.push(Cloud::Ptr(new Cloud(depthImageToCloud(image, intrinsics))));
+    inputs.push_back(depthValues(in));
+    const Cloud input = depthImageToCloud(inputs.back(), intrinsics);
+    const auto ready = stream16.push(Cloud::Ptr(new Cloud(input)));
     ASSERT_EQ(ready.size(), 1u);
-    const DepthImage expected = cloudToDepthImage(*ready[0], 1000.0);
+    const DepthImage expected = cloudToDepthImage(input, *ready[0], 1000.0);
     ASSERT_EQ(out->data.size(), expected.values.size() * 2);
-    EXPECT_EQ(std::memcmp(out->data.data(), expected.values.data(), out->data.size()), 0);
-    EXPECT_NE(std::memcmp(out->data.data(), in.data.data(), in.data.size()), 0); // it did filter
+    outputs.push_back(depthValues(*out));
+    EXPECT_EQ(outputs.back().values, expected.values) << "frame " << k;
+    EXPECT_NE(outputs.back().values, inputs.back().values) << "frame " << k; // it did filter
+    if (k == 0) // the first frame, filtered alone, moved along its normals: z alone is another image
+      EXPECT_NE(outputs.back().values, cloudToDepthImage(*ready[0], 1000.0).values);
   }
+  // The same frames as depth PNGs through range_nlm_denoise: its PNG outputs are the topic's.
+  const std::filesystem::path cli = std::filesystem::path(g_master->directory()) / "depth_cli";
+  std::filesystem::create_directories(cli / "in");
+  std::ofstream(cli / "intrinsics.txt") << "fx 300\nfy 300\ncx " << (w - 1) / 2.0 << "\ncy " << (h - 1) / 2.0
+                                        << "\ndepth_scale 1000\n";
+  for (int k = 0; k < 3; ++k)
+    writeDepthPng((cli / "in" / (std::to_string(k) + ".png")).string(), inputs[std::size_t(k)]);
+  const CommandResult run = runDenoise("--input-dir " + (cli / "in").string() + " --output-dir " + (cli / "out").string() +
+                                       " --intrinsics " + (cli / "intrinsics.txt").string() +
+                                       " --output-format png --temporal-radius 1 --causal --search-window 7 --patch 3 -q");
+  ASSERT_EQ(run.status, 0) << run.output;
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(readDepthPng((cli / "out" / (std::to_string(k) + ".png")).string()).values, outputs[std::size_t(k)].values)
+        << "frame " << k;
   EXPECT_TRUE(waitFor([&] { return readLog(manager.log()).find(stampText(777, 0)) != std::string::npos; }));
   EXPECT_NE(readLog(manager.log()).find("encoding 'rgb8' is not supported"), std::string::npos);
 
@@ -648,10 +691,11 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
     const auto ready = stream32.push(cloud);
     ASSERT_EQ(ready.size(), 1u);
     ASSERT_EQ(out->data.size(), std::size_t(w2) * h2 * 4);
+    const Cloud on_rays = reprojectOntoRays(*cloud, *ready[0]);
     for (std::size_t i = 0; i < ready[0]->size(); ++i) {
       float z;
       std::memcpy(&z, &out->data[i * 4], 4);
-      const float e = (*ready[0])[i].z;
+      const float e = on_rays[i].z;
       ASSERT_TRUE(z == e || (std::isnan(z) && std::isnan(e))) << "pixel " << i << ": " << z << " vs " << e;
     }
   }

@@ -27,14 +27,13 @@ namespace
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
-/// True if every valid point of the loaded input frame has a depth that a 16-bit depth image of
-/// `scale` can hold (always so for a depth-PNG input).
+/// True if every valid point of the input frame has a depth that a 16-bit depth image of `scale`
+/// can hold (always so for a depth-PNG input).
 bool
-depthsFit(const LoadedCloud& loaded, const std::string& input_path, double scale)
+depthsFit(const Cloud& input, const std::string& input_path, double scale)
 {
   if (isDepthImagePath(input_path))
     return true;
-  const Cloud input = xyzFromBlob(loaded, input_path);
   for (const pcl::PointXYZ& p : input)
     if (std::isfinite(p.z) && !(std::round(double(p.z) * scale) >= 1.0 && std::round(double(p.z) * scale) <= 65535.0))
       return false;
@@ -234,9 +233,12 @@ writeResult(const std::string& input_path, const std::string& output_path, Loade
     // A depth the input could hold that filtering moved just past the 16-bit range (a frame near
     // the sensor's largest value) is clamped, with a warning; an input whose depths never fitted
     // is refused (a smaller --depth-scale is needed).
+    // Each point goes onto its pixel's ray where the ray meets the plane the filter moved it onto
+    // (a depth image holds one range per pixel; z alone would drop the move across the ray).
+    const Cloud input = xyzFromBlob(loaded, input_path);
     DepthClamping clamping;
-    saveDepthPng(output_path, result, out.depth_scale,
-                 depthsFit(loaded, input_path, out.depth_scale) ? &clamping : nullptr);
+    saveDepthPng(output_path, input, result, out.depth_scale,
+                 depthsFit(input, input_path, out.depth_scale) ? &clamping : nullptr);
     if (clamping.above > 0 || clamping.below > 0)
       warnClamping(output_path, clamping, out.depth_scale);
     if (out.uncertainty)

@@ -55,7 +55,9 @@ outputOptionsFrom(const boost::program_options::variables_map& vm, bool single, 
 
 /// Writes `result`, the filtered points of the frame `loaded` read from `input_path`, to
 /// `output_path` as `out` says (PCD outputs atomically; the input's other fields are kept, so
-/// `loaded` takes the new points). A PNG depth that filtering moved just past the 16-bit range is
+/// `loaded` takes the new points). A PNG output puts each point on its pixel's ray, where the ray
+/// meets the plane the filter moved the point onto (cloudToDepthImage(input, filtered, ...));
+/// `loaded` must still hold the frame's input points then. A PNG depth that filtering moved just past the 16-bit range is
 /// clamped, with a warning on stderr, unless the input's depths never fitted (then it throws).
 /// With out.uncertainty, `uncertainty` (one value per point, else NaN everywhere: a frame passed
 /// through unfiltered) is written too. `filled` (one entry per point, empty when the hole filling

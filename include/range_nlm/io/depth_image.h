@@ -111,7 +111,9 @@ struct DepthClamping
 };
 
 /// Encodes the z of an organized cloud as depth values round(z * depth_scale); NaN points give 0.
-/// x and y are not stored (a reader recomputes them from the intrinsics). A valid point whose
+/// x and y are not stored (a reader recomputes them from the intrinsics), so this is right for
+/// points that lie on their pixels' rays already; for a filtered frame use the form below, which
+/// takes the filter's input too. A valid point whose
 /// value falls outside 1 ... 65535 (z <= 0, or z >= 65535.5 / depth_scale metres) is clamped to
 /// that range and counted in `*clamping` if `clamping` is given (a filtered depth image close to
 /// the sensor's largest value can move a little beyond it); without `clamping` it is an error:
@@ -135,16 +137,33 @@ depthMapToCloud(const std::vector<float>& values, int width, int height, const D
 /// cloudToDepthImage does for the scale and the cloud's size.
 std::vector<double>
 cloudToDepthValues(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale);
+/// The depth image of a filtered frame: each point of `filtered` first put on the ray of its
+/// pixel, the ray through the origin and the point of `input`, where that ray meets the plane
+/// the filter moved the point onto (reprojectOntoRays in ray_reprojection.h, with its
+/// `min_cos`), then encoded as cloudToDepthImage(cloud, depth_scale, clamping) does. This is
+/// the encoding for any filtered frame: the single-cloud form above keeps only z, which drops
+/// the part of a move along the normal that runs across the ray. `input` is the cloud the filter
+/// was given (for a depth image, depthImageToCloud's result). Throws std::invalid_argument as
+/// reprojectOntoRays and cloudToDepthImage do (sizes, depth scale, a depth out of range).
+DepthImage
+cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& input, const pcl::PointCloud<pcl::PointXYZ>& filtered,
+                  double depth_scale, DepthClamping* clamping = nullptr);
 
 /// readDepthPng + depthImageToCloud; errors name the file.
 pcl::PointCloud<pcl::PointXYZ>
 loadDepthPng(const std::string& path, const DepthIntrinsics& intrinsics,
              const io::MemoryBudget& budget = io::MemoryBudget());
 
-/// cloudToDepthImage + writeDepthPng; errors name the file.
+/// cloudToDepthImage(cloud, ...) + writeDepthPng (z as it is); errors name the file.
 void
 saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale,
              DepthClamping* clamping = nullptr);
+
+/// cloudToDepthImage(input, filtered, ...) + writeDepthPng: the filtered frame as a depth PNG,
+/// each point on its pixel's ray; errors name the file.
+void
+saveDepthPng(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& input,
+             const pcl::PointCloud<pcl::PointXYZ>& filtered, double depth_scale, DepthClamping* clamping = nullptr);
 
 namespace detail
 {

@@ -63,6 +63,14 @@ depthImageWithZ(const sensor_msgs::Image& image, const Cloud& xyz);
 sensor_msgs::Image::Ptr
 uncertaintyImage(const std_msgs::Header& header, std::uint32_t width, std::uint32_t height,
                  const std::vector<float>& sigma);
+/// The filtered frame of the depth image `image` (with its `info`) as an image like it: each
+/// point of `filtered` put on its pixel's ray where the ray meets the plane the filter moved it
+/// onto (range_nlm::reprojectOntoRays against the image's own back-projection, the encoding of
+/// range_nlm::cloudToDepthImage(input, filtered, ...) and of range_nlm_denoise's PNG output),
+/// then encoded as depthImageWithZ does. Throws InvalidMessage as cloudFromDepthImage and
+/// depthImageWithZ do.
+sensor_msgs::Image::Ptr
+filteredDepthImage(const sensor_msgs::Image& image, const sensor_msgs::CameraInfo& info, const Cloud& filtered);
 
 /// True if some point of `cloud` is finite.
 bool
