@@ -96,7 +96,8 @@ struct PngOutputs
 PngOutputs
 pngOutputs(const Cloud& input, const Cloud& filtered, double depth_scale)
 {
-  return {bench::depthImageOutput(input, filtered, depth_scale), bench::depthImageOutput(input, filtered, depth_scale, true)};
+  return {bench::depthImageOutput(input, filtered, depth_scale),
+          bench::depthImageOutput(input, filtered, depth_scale, true)};
 }
 
 const char* const kPngTableNote =

@@ -45,8 +45,8 @@ namespace range_nlm
 struct RayReprojectionParameters
 {
   /// Smallest |cos| between the plane's normal and the ray taken: below, the part of the move
-  /// across the ray moves the point along it by at most |m_across| / min_cos. In (0, 1], default 0.3 (a ray at most about 72 degrees
-  /// from the normal; docs/method.md says why).
+  /// across the ray moves the point along it by at most |m_across| / min_cos. In (0, 1],
+  /// default 0.3 (a ray at most about 72 degrees from the normal; docs/method.md says why).
   double min_cos = 0.3;
   /// Side of the square window of filtered points the plane is fitted to, pixels. Odd, 3 ... 99,
   /// default 5.
