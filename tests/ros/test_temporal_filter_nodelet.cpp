@@ -288,6 +288,8 @@ TEST(RosNode, TheUncertaintyImageIsNotPublishedWhenOff)
   input.publish(toPointCloud2(*frame(0), 400, 1));
   ASSERT_TRUE(output.next()) << readLog(node.log());
   EXPECT_FALSE(sigma.next(0.5));
+}
+
 TEST(RosNode, TheFilledMaskMarksExactlyThePointsTheHoleFillingGaveARange)
 {
   ros::param::set("/rnlm_holes/search_window", 7);
