@@ -146,9 +146,13 @@ reprojectOntoRays(const Cloud& input, const Cloud& filtered, const RayReprojecti
   Cloud out = filtered;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const int w = static_cast<int>(filtered.width);
-  RayReprojectionCounts tally;
+  std::size_t on_plane = 0, grazing = 0, unmoved = 0, without_ray = 0;
   bool dense = true;
-  for (std::size_t i = 0; i < out.size(); ++i) {
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(out.size());
+  // Each point is computed from the clouds as given: the result does not depend on the threads.
+#pragma omp parallel for schedule(static) reduction(+ : on_plane, grazing, unmoved, without_ray) reduction(&& : dense)
+  for (std::ptrdiff_t k = 0; k < size; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
     const pcl::PointXYZ& p = input[i];
     const pcl::PointXYZ& q = filtered[i];
     pcl::PointXYZ& o = out[i];
@@ -158,11 +162,11 @@ reprojectOntoRays(const Cloud& input, const Cloud& filtered, const RayReprojecti
       continue;
     }
     if (!isValid(p) || (p.x == 0.0f && p.y == 0.0f && p.z == 0.0f)) { // a filled hole: no ray
-      ++tally.without_ray;
+      ++without_ray;
       continue;
     }
     if (p.x == q.x && p.y == q.y && p.z == q.z) {
-      ++tally.unmoved;
+      ++unmoved;
       continue;
     }
     const Eigen::Vector3d from = vectorOf(p), to = vectorOf(q);
@@ -170,14 +174,14 @@ reprojectOntoRays(const Cloud& input, const Cloud& filtered, const RayReprojecti
                                                  parameters);
     Treatment treatment;
     const double s = rayScale(from, to - from, normal, parameters.min_cos, treatment);
-    ++(treatment == Treatment::on_plane ? tally.on_plane : tally.grazing);
+    ++(treatment == Treatment::on_plane ? on_plane : grazing);
     o.x = static_cast<float>(s * p.x);
     o.y = static_cast<float>(s * p.y);
     o.z = static_cast<float>(s * p.z);
   }
   out.is_dense = dense;
   if (counts != nullptr)
-    *counts = tally;
+    *counts = RayReprojectionCounts{on_plane, grazing, unmoved, without_ray};
   return out;
 }
 

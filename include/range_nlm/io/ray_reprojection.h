@@ -78,8 +78,8 @@ struct RayReprojectionCounts
 /// move keeps its place; a point invalid (a NaN or infinite coordinate) in `filtered` is NaN in x,
 /// y and z; a point valid only in `filtered` (a filled hole), or whose input is the origin, has no
 /// ray and is kept as it is. The result is organized like `filtered`, with its header, sensor
-/// origin and orientation, and `is_dense` recomputed; it does not depend on the thread count (it
-/// runs on one). `counts`, if given, receives how each point was treated.
+/// origin and orientation, and `is_dense` recomputed; it does not depend on the thread count (the
+/// points are computed in parallel, each from the two clouds as given). `counts`, if given, receives how each point was treated.
 /// Throws std::invalid_argument if the two clouds differ in width or height, either is empty or
 /// not organized (width * height != size), or a parameter is out of its range.
 pcl::PointCloud<pcl::PointXYZ>
