@@ -88,16 +88,8 @@ warnClamping(const DepthClamping& clamping, double depth_scale)
 {
   if (clamping.above == 0 && clamping.below == 0)
     return;
-  std::ostringstream warning;
-  warning << "range_nlm: ";
-  if (clamping.above > 0)
-    warning << clamping.above << " pixel(s) filtered to more than " << 65535.0 / depth_scale
-            << " m (65535 / depth scale " << depth_scale << ") stored as 65535";
-  if (clamping.above > 0 && clamping.below > 0)
-    warning << "; ";
-  if (clamping.below > 0)
-    warning << clamping.below << " pixel(s) filtered to less than " << 0.5 / depth_scale << " m stored as 1";
-  if (PyErr_WarnEx(PyExc_RuntimeWarning, warning.str().c_str(), 1) != 0)
+  const std::string warning = "range_nlm: " + clampingText(clamping, depth_scale);
+  if (PyErr_WarnEx(PyExc_RuntimeWarning, warning.c_str(), 1) != 0)
     throw py::error_already_set();
 }
 

@@ -530,6 +530,20 @@ cloudToDepthValues(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_sca
   return values;
 }
 
+std::string
+clampingText(const DepthClamping& clamping, double depth_scale)
+{
+  std::ostringstream text;
+  if (clamping.above > 0)
+    text << clamping.above << " pixel(s) filtered to more than " << 65535.0 / depth_scale << " m (65535 / depth scale "
+         << depth_scale << ") stored as 65535";
+  if (clamping.above > 0 && clamping.below > 0)
+    text << "; ";
+  if (clamping.below > 0)
+    text << clamping.below << " pixel(s) filtered to less than " << 0.5 / depth_scale << " m stored as 1";
+  return text.str();
+}
+
 DepthImage
 cloudToDepthImage(const pcl::PointCloud<pcl::PointXYZ>& cloud, double depth_scale, DepthClamping* clamping)
 {

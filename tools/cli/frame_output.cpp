@@ -43,16 +43,8 @@ depthsFit(const Cloud& input, const std::string& input_path, double scale)
 void
 warnClamping(const std::string& output_path, const DepthClamping& clamping, double depth_scale)
 {
-  std::ostringstream warning;
-  warning << "range_nlm_denoise: warning: '" << output_path << "': ";
-  if (clamping.above > 0)
-    warning << clamping.above << " pixel(s) filtered to more than " << 65535.0 / depth_scale
-            << " m (65535 / depth scale " << depth_scale << ") stored as 65535";
-  if (clamping.above > 0 && clamping.below > 0)
-    warning << "; ";
-  if (clamping.below > 0)
-    warning << clamping.below << " pixel(s) filtered to less than " << 0.5 / depth_scale << " m stored as 1";
-  std::cerr << printable(warning.str()) << "\n" << std::flush;
+  std::cerr << printable("range_nlm_denoise: warning: '" + output_path + "': " + clampingText(clamping, depth_scale))
+            << "\n" << std::flush;
 }
 
 /// The mask of the filled points as a 16-bit PNG (65535 where filled), as the depth beside it.

@@ -110,6 +110,11 @@ struct DepthClamping
   std::size_t below = 0;
 };
 
+/// What `clamping` counts, in words for a warning ("N pixel(s) filtered to more than ... m ...");
+/// empty if nothing was clamped.
+std::string
+clampingText(const DepthClamping& clamping, double depth_scale);
+
 /// Encodes the z of an organized cloud as depth values round(z * depth_scale); NaN points give 0.
 /// x and y are not stored (a reader recomputes them from the intrinsics), so this is right for
 /// points that lie on their pixels' rays already; for a filtered frame use the form below, which
