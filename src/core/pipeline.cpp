@@ -200,6 +200,21 @@ checkFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
     throw UnfilterableFrame("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
 }
 
+/// The frames' noise profiles as given start unknown, except those the caller handed in
+/// (FilterWorkspace::knowNoiseProfiles), which this call uses up.
+void
+knowGivenProfiles(const std::vector<const Grid*>& given, Workspace& workspace)
+{
+  workspace.profiled_grids = given;
+  workspace.given_profiles.assign(given.size(), NoiseProfile());
+  const std::vector<const NoiseProfile*>& known = workspace.known_profiles;
+  if (known.size() == given.size())
+    for (std::size_t k = 0; k < given.size(); ++k)
+      if (known[k])
+        workspace.given_profiles[k] = *known[k];
+  workspace.known_profiles.clear();
+}
+
 /// The filtered frame starts as the input. A grid of workspace.inputs that no other frame shares
 /// is taken over instead of copied (the input is not used after this).
 void
@@ -247,7 +262,9 @@ void
 runFilter(const std::vector<const Grid*>& given, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
 {
+  workspace.profiled_grids.clear();
   if (given.empty() || center < 0 || center >= static_cast<int>(given.size()) || !given[center]) {
+    workspace.known_profiles.clear();
     detail::runContiguous(given, center, parameters, viewpoint, active, workspace);
     return;
   }
@@ -260,16 +277,29 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   Grid as_given;
   if (parameters.fill_holes > 0)
     as_given = *given[center];
+  knowGivenProfiles(given, workspace);
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
-    frames[center] = detail::correctOutliersStage(*given[center], parameters, viewpoint, active, workspace);
+    NoiseProfile none;
+    const NoiseProfile* profile = &none;
+    try {
+      profile = &detail::givenFrameProfile(*given[center], center, parameters, viewpoint, workspace);
+    } catch (const UnfilterableFrame&) {
+      // Too few points for a noise estimate: nothing to test against (runContiguous reports it).
+    }
+    frames[center] = detail::correctOutliersStage(*given[center], *profile, parameters, viewpoint, active, workspace);
+    workspace.profiled_grids[center] = frames[center];
   }
   {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::neighbour_frames);
     frames = detail::levelNeighbourFrames(frames, center, parameters, viewpoint, workspace);
   }
+  // A levelled frame is no longer the frame as given: its noise is estimated anew.
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    if (frames[k] != workspace.profiled_grids[k])
+      workspace.profiled_grids[k] = nullptr;
   const int scales = detail::usableScales(*frames[center], parameters);
   if (scales > 1 && frames[center]->countValid() > 0)
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
@@ -282,6 +312,8 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     stage.start(Stage::hole_filling);
     detail::fillHoles(as_given, parameters, viewpoint, active, workspace);
   }
+  workspace.run.frame_profiles = workspace.given_profiles;
+  workspace.profiled_grids.clear();
 }
 
 void

@@ -680,3 +680,70 @@ TEST(TemporalFilter, StreamReportsTheIsolatedOutliersOfEachFrame)
   }
   EXPECT_EQ(moved, (std::vector<std::size_t>{0, 2, 0}));
 }
+
+// Each frame's noise is estimated on the frame itself, once, and kept while a window holds the
+// frame: a stream whose sensor changes mid-way (noise 2 mm, then 8 mm on the same scene) gives,
+// on every window, also those that straddle the change, the bits the temporal filter gives when
+// it estimates every frame's noise afresh.
+TEST(TemporalFilter, AStreamWhoseSensorChangesFollowsTheChange)
+{
+  std::vector<Cloud::ConstPtr> frames;
+  for (int k = 0; k < 6; ++k)
+    frames.emplace_back(new Cloud(test::makeCloud(48, 40, boxScene(12), k < 3 ? 0.002 : 0.008, 900 + k)));
+  const FilterParameters p = FilterParameters::recommended();
+  for (TemporalWindow mode : {TemporalWindow::centred, TemporalWindow::causal}) {
+    TemporalStream<pcl::PointXYZ> stream(1, mode, p);
+    std::vector<Cloud::Ptr> out;
+    auto take = [&](const std::vector<Cloud::Ptr>& ready) { out.insert(out.end(), ready.begin(), ready.end()); };
+    for (const auto& f : frames)
+      take(stream.push(f));
+    take(stream.flush());
+    ASSERT_EQ(out.size(), frames.size());
+    for (std::size_t t = 0; t < frames.size(); ++t) {
+      const std::size_t lo = t == 0 ? 0 : t - 1;
+      const std::size_t hi = mode == TemporalWindow::causal ? t : std::min(frames.size() - 1, t + 1);
+      TemporalNonLocalMeansFilter<pcl::PointXYZ> f;
+      f.setParameters(p);
+      f.setFrames(std::deque<Cloud::ConstPtr>(frames.begin() + lo, frames.begin() + hi + 1), t - lo);
+      Cloud expected;
+      f.filter(expected);
+      EXPECT_TRUE(sameBits(*out[t], expected)) << "frame " << t;
+    }
+  }
+}
+
+// A frame's profile handed to a run (as a stream keeps it) is used instead of an estimate: the
+// profile the run itself reported gives the same bits, a profile 10 times too large does not.
+TEST(TemporalFilter, AKnownNoiseProfileIsUsedInsteadOfAnEstimate)
+{
+  const auto frames = sequence(3, 0, 0.003, 950);
+  std::vector<Grid> grids;
+  for (const auto& f : frames)
+    grids.push_back(toGrid(*f));
+  const std::vector<const Grid*> window{&grids[0], &grids[1], &grids[2]};
+  const FilterParameters p = FilterParameters::recommended();
+  const Viewpoint origin{0.0f, 0.0f, 0.0f};
+  FilterWorkspace fresh;
+  runFilter(window, 1, p, origin, {}, fresh);
+  const std::vector<NoiseProfile> reported = fresh.result().frame_profiles;
+  ASSERT_EQ(reported.size(), 3u);
+  for (const NoiseProfile& profile : reported)
+    ASSERT_FALSE(profile.empty());
+  EXPECT_EQ(reported[0].sigma, estimateNoiseProfile(grids[0], p.search_window, p.bandwidth_samples, p.seed, origin).sigma);
+
+  FilterWorkspace told;
+  told.knowNoiseProfiles({&reported[0], &reported[1], &reported[2]});
+  runFilter(window, 1, p, origin, {}, told);
+  EXPECT_EQ(told.result().output.z, fresh.result().output.z);
+
+  NoiseProfile wrong = reported[2];
+  for (float& s : wrong.sigma)
+    s *= 10.0f;
+  FilterWorkspace misled;
+  misled.knowNoiseProfiles({nullptr, nullptr, &wrong});
+  runFilter(window, 1, p, origin, {}, misled);
+  EXPECT_NE(misled.result().output.z, fresh.result().output.z);
+  // Handed-in profiles serve one run only.
+  runFilter(window, 1, p, origin, {}, misled);
+  EXPECT_EQ(misled.result().output.z, fresh.result().output.z);
+}

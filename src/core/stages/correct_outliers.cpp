@@ -5,17 +5,11 @@ namespace range_nlm
 {
 
 const Grid*
-detail::correctOutliersStage(const Grid& input, const FilterParameters& parameters, const Viewpoint& viewpoint,
-                             const std::vector<unsigned char>& active, Workspace& workspace)
+detail::correctOutliersStage(const Grid& input, const NoiseProfile& profile, const FilterParameters& parameters,
+                             const Viewpoint& viewpoint, const std::vector<unsigned char>& active,
+                             Workspace& workspace)
 {
   const int threads = resolveThreads(parameters.threads);
-  NoiseProfile profile;
-  try {
-    profile = estimateNoiseProfile(input, parameters.search_window, parameters.bandwidth_samples, parameters.seed,
-                                   viewpoint, threads);
-  } catch (const UnfilterableFrame&) {
-    // Too few points for a noise estimate: nothing to test against (runContiguous reports it).
-  }
   const bool sized = active.empty() || active.size() == input.size(); // runContiguous reports a mismatch
   if (profile.empty() || !sized)
     return &input;

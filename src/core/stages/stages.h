@@ -13,13 +13,21 @@ namespace detail
 
 // Once per call, on the frames as given (runFilter).
 
+/// The noise profile of frame k of the call as given (workspace.given_profiles[k]): estimated on
+/// `frame` (frame k, or the current frame's copy) the first time, known afterwards. Throws
+/// UnfilterableFrame as estimateNoiseProfile does. (frame_bandwidths.cpp)
+const NoiseProfile&
+givenFrameProfile(const Grid& frame, int k, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                  Workspace& workspace);
+
 /// The current frame `input` with its isolated outliers moved onto their neighbours' surface
-/// (FilterParameters::outlier_sigmas), so that every later stage (noise estimates, frame
-/// comparisons, normals) sees them there: workspace.corrected if some moved, else `input`.
-/// Sets workspace.run.outliers_moved. (correct_outliers.cpp)
+/// (FilterParameters::outlier_sigmas) as tested against `profile` (its noise profile; empty:
+/// nothing to test against), so that every later stage (noise estimates, frame comparisons,
+/// normals) sees them there: workspace.corrected if some moved, else `input`. Sets
+/// workspace.run.outliers_moved. (correct_outliers.cpp)
 const Grid*
-correctOutliersStage(const Grid& input, const FilterParameters& parameters, const Viewpoint& viewpoint,
-                     const std::vector<unsigned char>& active, Workspace& workspace);
+correctOutliersStage(const Grid& input, const NoiseProfile& profile, const FilterParameters& parameters,
+                     const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace);
 
 /// The frames with low-frequency offsets between them levelled (levelFrames) in
 /// workspace.leveled, or `frames` as they are; workspace.frames_moved receives the frames'
