@@ -296,10 +296,9 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     stage.start(Stage::neighbour_frames);
     frames = detail::levelNeighbourFrames(frames, center, parameters, viewpoint, workspace);
   }
-  // A levelled frame is no longer the frame as given: its noise is estimated anew.
-  for (std::size_t k = 0; k < frames.size(); ++k)
-    if (frames[k] != workspace.profiled_grids[k])
-      workspace.profiled_grids[k] = nullptr;
+  // A levelled frame keeps its noise profile: the levelling moves its points by a slowly varying
+  // offset along the rays, which the local planes of the estimate take up.
+  workspace.profiled_grids = frames;
   const int scales = detail::usableScales(*frames[center], parameters);
   if (scales > 1 && frames[center]->countValid() > 0)
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);

@@ -71,8 +71,9 @@ struct Workspace
   std::vector<float> normal_planes, window_planes;
   /// The noise profiles of the running call's frames as given, each estimated once per call (or
   /// handed in by knowNoiseProfiles): per frame, the grid a profile may stand for (null: none) and
-  /// the profile (empty: not yet estimated). The current frame's stands for the frame after the
-  /// outlier stage too: moving a few isolated points does not change the frame's noise.
+  /// the profile (empty: not yet estimated). A frame's profile stands for the frame after the
+  /// outlier stage and the levelling too: moving a few isolated points, or all points by a slowly
+  /// varying offset along their rays, does not change the frame's noise.
   std::vector<const Grid*> profiled_grids;
   std::vector<NoiseProfile> given_profiles;
   /// Profiles handed in for the next call (FilterWorkspace::knowNoiseProfiles).
