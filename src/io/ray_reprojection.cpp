@@ -144,11 +144,11 @@ enum class Treatment { on_plane, grazing, unmoved };
 /// |n . p| is taken as min_cos |p|, so that the part across the ray moves the point along it by
 /// at most |m_across| / min_cos. The carried part is weighted by how far the plane can be
 /// trusted: a plane turned by an angle e about p + m moves the crossing along the ray by about
-/// L e / cos, L the distance from p + m to the crossing, cos = (n . p) / |p|; with e the plane's
-/// angle spread (planeAngleSpread) and C = c |p| the carried move, the weight C^2 / (C^2 +
-/// (L e / cos)^2) keeps the crossing where that error is small against the move and falls back
-/// smoothly to the part along the ray (the point of the ray nearest to p + m) where it is not.
-/// Without a plane (n = 0) only the part along the ray is kept.
+/// L e / cos, L the distance from p + m to the crossing, cos = (n . p) / |p| (bounded as above);
+/// with e the plane's angle spread (planeAngleSpread) and C = c |p| the carried move, the weight
+/// C^2 / (C^2 + (L e / cos)^2) keeps the crossing where that error is small against the move and
+/// falls back smoothly to the part along the ray (the point of the ray nearest to p + m) where it
+/// is not. Without a plane (n = 0) only the part along the ray is kept.
 double
 rayScale(const Eigen::Vector3d& p, const Eigen::Vector3d& m, const Eigen::Vector3d& n, double angle_spread,
          double min_cos, Treatment& treatment)
@@ -163,9 +163,10 @@ rayScale(const Eigen::Vector3d& p, const Eigen::Vector3d& m, const Eigen::Vector
     const double np = n.dot(p);
     const double least = min_cos * length;
     treatment = std::fabs(np) >= least ? Treatment::on_plane : Treatment::grazing;
-    const double carried = n.dot(across) / (treatment == Treatment::on_plane ? np : (np < 0.0 ? -least : least));
+    const double cosine = treatment == Treatment::on_plane ? np : (np < 0.0 ? -least : least);
+    const double carried = n.dot(across) / cosine;
     const double slide = ((s + carried) * p - (p + m)).norm();
-    const double error = slide * angle_spread * length / std::fabs(np);
+    const double error = slide * angle_spread * length / std::fabs(cosine);
     const double move = carried * length;
     const double weight = move * move / (move * move + error * error);
     if (std::isfinite(weight)) // 0 / 0: nothing carried
