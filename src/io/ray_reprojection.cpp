@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace range_nlm
 {
@@ -87,21 +88,72 @@ surfaceNormal(const Cloud& filtered, int u, int v, const Eigen::Vector3d& centre
   return normal.normalized();
 }
 
+/// surfaceNormal at every pixel whose filtered point is valid (zero elsewhere): a moved point
+/// needs its own plane and those of the windows around it.
+std::vector<Eigen::Vector3d>
+surfaceNormals(const Cloud& filtered, const RayReprojectionParameters& parameters)
+{
+  const int w = static_cast<int>(filtered.width);
+  std::vector<Eigen::Vector3d> normals(filtered.size(), Eigen::Vector3d::Zero());
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(filtered.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t k = 0; k < size; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    if (isValid(filtered[i]))
+      normals[i] = surfaceNormal(filtered, static_cast<int>(i % w), static_cast<int>(i / w), vectorOf(filtered[i]),
+                                 parameters);
+  }
+  return normals;
+}
+
+/// How far the plane n at pixel (u, v) may be turned: the RMS sine of its angle to the planes of
+/// the windows half a window away in the 8 directions (those on the point's side of a depth edge,
+/// as surfaceNormal gates). On a plane they agree up to the filter's leftover noise; on bumps
+/// the filter left, across creases and where a window straddles an edge, they do not. 1 (as
+/// uncertain as an orientation can be) if no such window has a plane.
+double
+planeAngleSpread(const Cloud& filtered, const std::vector<Eigen::Vector3d>& normals, int u, int v,
+                 const Eigen::Vector3d& centre, const Eigen::Vector3d& n, const RayReprojectionParameters& parameters)
+{
+  const int w = static_cast<int>(filtered.width), h = static_cast<int>(filtered.height);
+  const int step = parameters.window / 2;
+  const double range = centre.norm();
+  double sum = 0.0;
+  int count = 0;
+  for (int b = -1; b <= 1; ++b)
+    for (int a = -1; a <= 1; ++a) {
+      const int x = u + a * step, y = v + b * step;
+      if ((a == 0 && b == 0) || x < 0 || y < 0 || x >= w || y >= h)
+        continue;
+      const std::size_t j = static_cast<std::size_t>(y) * w + x;
+      if (normals[j].isZero() || std::fabs(vectorOf(filtered[j]).norm() - range) > parameters.range_gate * range)
+        continue;
+      sum += normals[j].cross(n).squaredNorm();
+      ++count;
+    }
+  return count > 0 ? std::sqrt(sum / count) : 1.0;
+}
+
 enum class Treatment { on_plane, grazing, unmoved };
 
 /// The factor s that puts the point p (moved by m to p + m) on its ray, s p: where the ray meets
 /// the plane through p + m with unit normal n, s = 1 + (n . m) / (n . p), computed as the part of
 /// the move along the ray, a = (m . p) / |p|^2, plus the part across it carried onto the ray
-/// through the plane, (n . m_across) / (n . p) (the same sum, but a move along the ray stays
-/// exact whatever the bound below does). At a grazing angle (|n . p| < min_cos |p|) |n . p| is
-/// taken as min_cos |p|, so that the part across the ray moves the point along it by at most
-/// |m_across| / min_cos. Without a plane (n = 0) only the part along the ray is kept: the
-/// point of the ray nearest to p + m.
+/// through the plane, c = (n . m_across) / (n . p) (the same sum, but a move along the ray stays
+/// exact whatever the bound and the weight below do). At a grazing angle (|n . p| < min_cos |p|)
+/// |n . p| is taken as min_cos |p|, so that the part across the ray moves the point along it by
+/// at most |m_across| / min_cos. The carried part is weighted by how far the plane can be
+/// trusted: a plane turned by an angle e about p + m moves the crossing along the ray by about
+/// L e / cos, L the distance from p + m to the crossing, cos = (n . p) / |p| (bounded as above);
+/// with e the plane's angle spread (planeAngleSpread) and C = c |p| the carried move, the weight
+/// C^2 / (C^2 + (L e / cos)^2) keeps the crossing where that error is small against the move and
+/// falls back smoothly to the part along the ray (the point of the ray nearest to p + m) where it
+/// is not. Without a plane (n = 0) only the part along the ray is kept.
 double
-rayScale(const Eigen::Vector3d& p, const Eigen::Vector3d& m, const Eigen::Vector3d& n, double min_cos,
-         Treatment& treatment)
+rayScale(const Eigen::Vector3d& p, const Eigen::Vector3d& m, const Eigen::Vector3d& n, double angle_spread,
+         double min_cos, Treatment& treatment)
 {
-  const double pp = p.squaredNorm();
+  const double pp = p.squaredNorm(), length = std::sqrt(pp);
   const double along = m.dot(p) / pp;
   const Eigen::Vector3d across = m - along * p;
   double s = 1.0 + along;
@@ -109,12 +161,19 @@ rayScale(const Eigen::Vector3d& p, const Eigen::Vector3d& m, const Eigen::Vector
     treatment = Treatment::grazing;
   } else {
     const double np = n.dot(p);
-    const double least = min_cos * std::sqrt(pp);
+    const double least = min_cos * length;
     treatment = std::fabs(np) >= least ? Treatment::on_plane : Treatment::grazing;
-    s += n.dot(across) / (treatment == Treatment::on_plane ? np : (np < 0.0 ? -least : least));
+    const double cosine = treatment == Treatment::on_plane ? np : (np < 0.0 ? -least : least);
+    const double carried = n.dot(across) / cosine;
+    const double slide = ((s + carried) * p - (p + m)).norm();
+    const double error = slide * angle_spread * length / std::fabs(cosine);
+    const double move = carried * length;
+    const double weight = move * move / (move * move + error * error);
+    if (std::isfinite(weight)) // 0 / 0: nothing carried
+      s += weight * carried;
   }
   // Through the camera (a move no filter of a surface makes): the filtered range on the ray.
-  return s > 0.0 && std::isfinite(s) ? s : (p + m).norm() / std::sqrt(pp);
+  return s > 0.0 && std::isfinite(s) ? s : (p + m).norm() / length;
 }
 
 } // namespace
@@ -149,6 +208,7 @@ reprojectOntoRays(const Cloud& input, const Cloud& filtered, const RayReprojecti
   std::size_t on_plane = 0, grazing = 0, unmoved = 0, without_ray = 0;
   bool dense = true;
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(out.size());
+  const std::vector<Eigen::Vector3d> normals = surfaceNormals(filtered, parameters);
   // Each point is computed from the clouds as given: the result does not depend on the threads.
 #pragma omp parallel for schedule(static) reduction(+ : on_plane, grazing, unmoved, without_ray) reduction(&& : dense)
   for (std::ptrdiff_t k = 0; k < size; ++k) {
@@ -170,10 +230,12 @@ reprojectOntoRays(const Cloud& input, const Cloud& filtered, const RayReprojecti
       continue;
     }
     const Eigen::Vector3d from = vectorOf(p), to = vectorOf(q);
-    const Eigen::Vector3d normal = surfaceNormal(filtered, static_cast<int>(i % w), static_cast<int>(i / w), to,
-                                                 parameters);
+    const Eigen::Vector3d& normal = normals[i];
+    const double spread = normal.isZero() ? 0.0
+                                          : planeAngleSpread(filtered, normals, static_cast<int>(i % w),
+                                                             static_cast<int>(i / w), to, normal, parameters);
     Treatment treatment;
-    const double s = rayScale(from, to - from, normal, parameters.min_cos, treatment);
+    const double s = rayScale(from, to - from, normal, spread, parameters.min_cos, treatment);
     ++(treatment == Treatment::on_plane ? on_plane : grazing);
     o.x = static_cast<float>(s * p.x);
     o.y = static_cast<float>(s * p.y);

@@ -123,6 +123,41 @@ TEST(RayReprojection, FilteredTiltedPlaneAsPngIsAsCloseToThePlaneAsTheFilteredCl
   EXPECT_GT(test::planeRmse(z_only, kTiltedNormal, kTiltedOffset), 1.1 * pcd_rmse);
 }
 
+TEST(RayReprojection, RidgeAsPngIsNoRougherThanTheInputWhereTheWindowsPlanesDisagree)
+{
+  // A ridge 1 m away (faces z = 1 - 0.8 |x|, 39 degrees from the image plane) with 3 mm noise
+  // along the rays. The filtered points lie on the surface but three pixels across their rays,
+  // as a filter moving points along tilted normals puts them: next to the ridge the plane fitted
+  // around a point is the other face's, and carried along the ray in full it leaves the band
+  // rougher than the input (3.16 mm RMS against 2.33 without the weight).
+  constexpr double focal = 300.0, slope = 0.8;
+  constexpr int shift = 3, band = 3;
+  const test::DepthFunction ridge = test::crease(kWidth / 2, 1.0, slope);
+  const Cloud input = test::makeCloud(kWidth, kHeight, ridge, 0.003, 3, focal);
+  const Cloud surface = test::makeCloud(kWidth, kHeight, ridge, 0.0, 3, focal);
+  Cloud filtered(kWidth, kHeight);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int v = 0; v < kHeight; ++v)
+    for (int u = 0; u < kWidth; ++u)
+      filtered.at(u, v) = u + shift < kWidth ? surface.at(u + shift, v) : pcl::PointXYZ(nan, nan, nan);
+  const Cloud out = reprojectOntoRays(input, filtered);
+  // RMS distance over the band around the ridge from the face each pixel sees.
+  auto rms = [&](const Cloud& cloud) {
+    double sum = 0.0;
+    int count = 0;
+    for (int v = 0; v < kHeight; ++v)
+      for (int u = kWidth / 2 - band; u <= kWidth / 2 + band; ++u) {
+        const double side = surface.at(u, v).x < 0.0f ? -1.0 : 1.0;
+        const Eigen::Vector3d face(side * slope, 0.0, 1.0);
+        const double d = (face.dot(vec(cloud.at(u, v))) - 1.0) / face.norm();
+        sum += d * d;
+        ++count;
+      }
+    return std::sqrt(sum / count);
+  };
+  EXPECT_LE(rms(out), rms(input));
+}
+
 TEST(RayReprojection, GrazingSurfaceStaysOnItsRaysWithABoundedMove)
 {
   // A plane seen almost edge-on by a narrow camera: the rays meet it at 73 to 85 degrees from

@@ -23,14 +23,23 @@
 /// rays"). A move along the ray (--line-of-sight, temporal runs) is on the ray already: s p is
 /// then p' (up to rounding) whatever n is.
 ///
+/// The move is split into its part along the ray, kept as it is, and its part across the ray,
+/// m_across, which the plane carries onto the ray as a move C = (n . m_across) / cos along it.
+/// How far that can be trusted depends on the plane: turned by an angle e about p', it moves
+/// the crossing along the ray by about L e / |cos|, L the distance from p' to the crossing. e is
+/// estimated from the planes of the windows half a window away (the RMS sine of their angles to
+/// n, on the point's side of a depth edge): they agree on a plane, and differ where the surface
+/// bends within a window, where the filter left bumps and where a window straddles an edge or a
+/// crease. The carried move is weighted by C^2 / (C^2 + (L e / cos)^2): in full where its error
+/// is small against it, falling back smoothly to the part along the ray (the point of the ray
+/// nearest to p') where it is not (docs/method.md, "How far the plane is trusted").
+///
 /// Where the ray meets the plane at a grazing angle (|cos| < min_cos), a small error of n would
-/// move the point far along its ray. The move is split into its part along the ray, kept as it
-/// is, and its part across the ray, m_across, which the plane carries onto the ray; at a grazing
-/// angle |cos| is taken as min_cos there, so that this part moves the point along its ray by at
-/// most |m_across| / min_cos (as the filter's own line-of-sight move is bounded): a point moves
-/// along its ray by at most |m| sqrt(1 + 1 / min_cos^2), 3.5 |m| at the default. Where no plane
-/// fits (fewer than 6 points on the point's side, or all on a line) only the part along the ray
-/// is kept: the point of the ray nearest to p'.
+/// move the point far along its ray: |cos| is taken as min_cos there, so that the part across
+/// the ray moves the point along its ray by at most |m_across| / min_cos (as the filter's own
+/// line-of-sight move is bounded): a point moves along its ray by at most
+/// |m| sqrt(1 + 1 / min_cos^2), 3.5 |m| at the default. Where no plane fits (fewer than 6 points
+/// on the point's side, or all on a line) only the part along the ray is kept.
 #pragma once
 
 #include <pcl/point_cloud.h>
@@ -48,8 +57,8 @@ struct RayReprojectionParameters
   /// across the ray moves the point along it by at most |m_across| / min_cos. In (0, 1],
   /// default 0.3 (a ray at most about 72 degrees from the normal; docs/method.md says why).
   double min_cos = 0.3;
-  /// Side of the square window of filtered points the plane is fitted to, pixels. Odd, 3 ... 99,
-  /// default 5.
+  /// Side of the square window of filtered points the plane is fitted to, pixels; the planes it
+  /// is compared with are those of the windows window / 2 pixels away. Odd, 3 ... 99, default 5.
   int window = 5;
   /// Points of the window whose range differs from the point's by more than this fraction of it
   /// are left out of the fit (the other side of a depth edge). In (0, 1], default 0.05.
@@ -62,7 +71,8 @@ struct RayReprojectionParameters
 /// What reprojectOntoRays did, point by point.
 struct RayReprojectionCounts
 {
-  /// Moved points put where their ray meets the filtered surface's plane.
+  /// Moved points put where their ray meets the filtered surface's plane (the part of the move
+  /// across the ray carried as far as the plane is trusted).
   std::size_t on_plane = 0;
   /// Moved points at a grazing angle (bounded move) or without a plane (nearest point of the ray).
   std::size_t grazing = 0;
