@@ -188,12 +188,6 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
   Workspace& phase = workspace.phase.front();
   phase.observer = workspace.observer;
   phase.frames_moved = workspace.frames_moved;
-  // The phases sample one sensor at one spacing: the noise profile each frame's first phase
-  // gives stands for all its phases (the grids of sub are the same objects in every phase).
-  for (std::size_t f = 0; f < frames.size(); ++f)
-    sub_frames[f] = &sub[f];
-  phase.profiled_grids = sub_frames;
-  phase.given_profiles.assign(frames.size(), NoiseProfile());
   for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
     for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
       for (std::size_t f = 0; f < frames.size(); ++f) {
@@ -217,7 +211,6 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
                          workspace.phase_uncertainty, threads);
       }
     }
-  phase.profiled_grids.clear();
   split.stop();
   finishDilatedPasses(frames, center, parameters, viewpoint, active, workspace);
 }
