@@ -114,18 +114,9 @@ private:
     bool wanted = true; // whether the frame is to be filtered
     bool converted = false;
     Grid grid;
-    /// Its noise profile as a filter run reported it (FilterRun::frame_profiles), and the
-    /// viewpoint of that run: the later runs whose window holds the frame do not estimate it again.
-    NoiseProfile profile;
-    Viewpoint profile_viewpoint{};
   };
 
   CloudPtr filterAt(std::size_t t);
-  /// The known noise profiles of a run's frames (`held`: per frame of the run, its held frame;
-  /// null for the recursive history, whose noise changes from frame to frame) handed to the run
-  /// (FilterWorkspace::knowNoiseProfiles), and afterwards the profiles the run reported kept.
-  void knowProfiles(const std::vector<HeldFrame*>& held, const Viewpoint& viewpoint);
-  void keepProfiles(const std::vector<HeldFrame*>& held, const Viewpoint& viewpoint);
   /// Frame t's grid, converted on first use; `position` is its index in the window being filtered
   /// (for the error message).
   const Grid& gridOf(std::size_t t, std::size_t position);

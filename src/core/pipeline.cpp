@@ -200,19 +200,14 @@ checkFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
     throw UnfilterableFrame("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
 }
 
-/// The frames' noise profiles as given start unknown, except those the caller handed in
-/// (FilterWorkspace::knowNoiseProfiles), which this call uses up.
+/// The current frame's noise profile as given starts unknown; the other frames' profiles are
+/// estimated where they are used (each with a sample of its own).
 void
-knowGivenProfiles(const std::vector<const Grid*>& given, Workspace& workspace)
+startGivenProfiles(const std::vector<const Grid*>& given, int center, Workspace& workspace)
 {
-  workspace.profiled_grids = given;
+  workspace.profiled_grids.assign(given.size(), nullptr);
+  workspace.profiled_grids[center] = given[center];
   workspace.given_profiles.assign(given.size(), NoiseProfile());
-  const std::vector<const NoiseProfile*>& known = workspace.known_profiles;
-  if (known.size() == given.size())
-    for (std::size_t k = 0; k < given.size(); ++k)
-      if (known[k])
-        workspace.given_profiles[k] = *known[k];
-  workspace.known_profiles.clear();
 }
 
 /// The filtered frame starts as the input. A grid of workspace.inputs that no other frame shares
@@ -264,7 +259,6 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
 {
   workspace.profiled_grids.clear();
   if (given.empty() || center < 0 || center >= static_cast<int>(given.size()) || !given[center]) {
-    workspace.known_profiles.clear();
     detail::runContiguous(given, center, parameters, viewpoint, active, workspace);
     return;
   }
@@ -277,7 +271,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   Grid as_given;
   if (parameters.fill_holes > 0)
     as_given = *given[center];
-  knowGivenProfiles(given, workspace);
+  startGivenProfiles(given, center, workspace);
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
@@ -298,7 +292,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   }
   // A levelled frame keeps its noise profile: the levelling moves its points by a slowly varying
   // offset along the rays, which the local planes of the estimate take up.
-  workspace.profiled_grids = frames;
+  workspace.profiled_grids[center] = frames[center];
   const int scales = detail::usableScales(*frames[center], parameters);
   if (scales > 1 && frames[center]->countValid() > 0)
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
@@ -311,7 +305,6 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     stage.start(Stage::hole_filling);
     detail::fillHoles(as_given, parameters, viewpoint, active, workspace);
   }
-  workspace.run.frame_profiles = workspace.given_profiles;
   workspace.profiled_grids.clear();
 }
 

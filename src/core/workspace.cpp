@@ -45,12 +45,6 @@ FilterWorkspace::setStageObserver(StageObserver* observer)
 }
 
 void
-FilterWorkspace::knowNoiseProfiles(std::vector<const NoiseProfile*> profiles)
-{
-  workspace_->known_profiles = std::move(profiles);
-}
-
-void
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, FilterWorkspace& workspace)
 {

@@ -69,15 +69,14 @@ struct Workspace
   std::vector<signed char> frames_moved;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
-  /// The noise profiles of the running call's frames as given, each estimated once per call (or
-  /// handed in by knowNoiseProfiles): per frame, the grid a profile may stand for (null: none) and
-  /// the profile (empty: not yet estimated). A frame's profile stands for the frame after the
-  /// outlier stage and the levelling too: moving a few isolated points, or all points by a slowly
-  /// varying offset along their rays, does not change the frame's noise.
+  /// The current frame's noise profile as the running call was given the frame, estimated once
+  /// per call (by the outlier stage, or by the first pass): per frame of the call, the grid the
+  /// profile stands for (null: none; only the current frame's is set) and the profile (empty: not
+  /// yet estimated). It stands for the frame after the outlier stage and the levelling too: moving
+  /// a few isolated points, or all points by a slowly varying offset along their rays, does not
+  /// change the frame's noise.
   std::vector<const Grid*> profiled_grids;
   std::vector<NoiseProfile> given_profiles;
-  /// Profiles handed in for the next call (FilterWorkspace::knowNoiseProfiles).
-  std::vector<const NoiseProfile*> known_profiles;
   /// If set, told where each phase of a run begins and ends. Not owned.
   StageObserver* observer = nullptr;
 };

@@ -310,12 +310,6 @@ struct FilterRun
   /// in the current frame and was given a range by the hole filling, 0 elsewhere; empty when the
   /// hole filling is off.
   std::vector<unsigned char> filled;
-  /// Per frame as given (frame order as given): its noise profile as the run estimated it on the
-  /// frame as given (estimateNoiseProfile with the parameters' search window, samples and seed, and
-  /// the run's viewpoint), or as it was handed in (FilterWorkspace::knowNoiseProfiles); empty for a
-  /// frame whose profile the run did not need on the frame as given (e.g. a levelled neighbour).
-  /// A frame's profile does not depend on which frame is filtered, so a stream can keep it.
-  std::vector<NoiseProfile> frame_profiles;
 };
 
 /// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.
@@ -402,12 +396,6 @@ public:
   /// Told where each phase of every run begins and ends (e.g. for timing, as range_nlm_bench
   /// --breakdown does); null for none. Not owned.
   void setStageObserver(StageObserver* observer);
-  /// The noise profiles of the next run's frames as given, one entry per frame (null: not known),
-  /// as an earlier run with the same parameters and viewpoint reported them in
-  /// FilterRun::frame_profiles for the same frame: the next run uses them instead of estimating
-  /// them again (a temporal stream estimates each frame's noise once, however many windows hold
-  /// it). The pointers must stay valid until that run returns; the run forgets them.
-  void knowNoiseProfiles(std::vector<const NoiseProfile*> profiles);
 
 private:
   friend void runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,

@@ -82,16 +82,12 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   };
   // Recursive mode: the history (once there is one) and frame t; else frames lo .. hi.
   std::vector<const Grid*> grids;
-  std::vector<HeldFrame*> held;
   std::size_t current = 0;
   if (recursive_) {
-    if (!history_.empty()) {
+    if (!history_.empty())
       grids.push_back(&history_.average);
-      held.push_back(nullptr);
-    }
     current = grids.size();
     grids.push_back(&gridOf(t, current));
-    held.push_back(&window_[t - first_]);
   } else {
     const std::size_t lo = std::max(t >= static_cast<std::size_t>(radius_) ? t - radius_ : 0, first_);
     const std::size_t hi = causal_ ? t : std::min(t + radius_, pushed_ - 1);
@@ -99,18 +95,14 @@ TemporalStream<PointT>::filterAt(std::size_t t)
       if (!window_[k - first_].cloud)
         throw std::invalid_argument("range_nlm: frame " + std::to_string(k) + " is null but frame " +
                                     std::to_string(t) + " is to be filtered with it");
-    for (std::size_t k = lo; k <= hi; ++k) {
+    for (std::size_t k = lo; k <= hi; ++k)
       grids.push_back(&gridOf(k, k - lo));
-      held.push_back(&window_[k - first_]);
-    }
     current = t - lo;
   }
   const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
   CloudPtr out(new PointCloud);
   try {
-    knowProfiles(held, viewpoint);
     runFilter(grids, static_cast<int>(current), parameters_, viewpoint, {}, workspace_);
-    keepProfiles(held, viewpoint);
   } catch (const UnfilterableFrame& e) {
     // Passed through unchanged; a live stream must not stop at one covered or dropped frame.
     *out = *frame;
@@ -132,29 +124,6 @@ TemporalStream<PointT>::filterAt(std::size_t t)
   remember(t, true);
   last_outputs_.back().milliseconds = elapsed();
   return out;
-}
-
-template <typename PointT>
-void
-TemporalStream<PointT>::knowProfiles(const std::vector<HeldFrame*>& held, const Viewpoint& viewpoint)
-{
-  std::vector<const NoiseProfile*> known(held.size(), nullptr);
-  for (std::size_t k = 0; k < held.size(); ++k)
-    if (held[k] && !held[k]->profile.empty() && held[k]->profile_viewpoint == viewpoint)
-      known[k] = &held[k]->profile;
-  workspace_.knowNoiseProfiles(std::move(known));
-}
-
-template <typename PointT>
-void
-TemporalStream<PointT>::keepProfiles(const std::vector<HeldFrame*>& held, const Viewpoint& viewpoint)
-{
-  const std::vector<NoiseProfile>& reported = workspace_.result().frame_profiles;
-  for (std::size_t k = 0; k < held.size() && k < reported.size(); ++k)
-    if (held[k] && held[k]->profile.empty() && !reported[k].empty()) {
-      held[k]->profile = reported[k];
-      held[k]->profile_viewpoint = viewpoint;
-    }
 }
 
 template <typename PointT>

@@ -34,22 +34,22 @@ void
 estimateFrame(FrameContext& ctx, int k, const Grid& g, const NormalField* normals, float rho_median)
 {
   const FilterParameters& parameters = ctx.parameters;
+  const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - ctx.center) * 7919u;
   if (ctx.adaptive) {
-    // The same sample for every frame: a frame's profile does not depend on which frame is
-    // filtered, so it is estimated once per call (and once per stream, see givenFrameProfile).
+    // The current frame's first pass uses the profile the outlier stage estimated on it (the same
+    // sample), so that a frame's noise is estimated once per call.
     const std::vector<const Grid*>& given = ctx.workspace.profiled_grids;
-    const bool as_given = static_cast<std::size_t>(k) < given.size() && given[k] == ctx.frames[k] &&
-                          (k != ctx.center || ctx.iteration == 0);
+    const bool as_given = k == ctx.center && ctx.iteration == 0 && static_cast<std::size_t>(k) < given.size() &&
+                          given[k] == ctx.frames[k];
     ctx.profiles[k] = as_given ? givenFrameProfile(g, k, parameters, ctx.viewpoint, ctx.workspace)
-                               : estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples,
-                                                      parameters.seed, ctx.viewpoint, ctx.threads);
+                               : estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed,
+                                                      ctx.viewpoint, ctx.threads);
     Bandwidths b;
     b.sigma_s = ctx.profiles[k].sigmaAt(rho_median);
     b.mu_d = ctx.profiles[k].extentAt(rho_median) * rho_median;
     ctx.bandwidths[k] = finishBandwidths(b, parameters);
     return;
   }
-  const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - ctx.center) * 7919u;
   Workspace& workspace = ctx.workspace;
   if (!normals)
     estimateNormalsGated(g, parameters.normal_window, ctx.viewpoint, ctx.threads, {}, 0, workspace.normals,
