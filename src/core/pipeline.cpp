@@ -200,16 +200,6 @@ checkFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
     throw UnfilterableFrame("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
 }
 
-/// The current frame's noise profile as given starts unknown; the other frames' profiles are
-/// estimated where they are used (each with a sample of its own).
-void
-startGivenProfiles(const std::vector<const Grid*>& given, int center, Workspace& workspace)
-{
-  workspace.profiled_grids.assign(given.size(), nullptr);
-  workspace.profiled_grids[center] = given[center];
-  workspace.given_profiles.assign(given.size(), NoiseProfile());
-}
-
 /// The filtered frame starts as the input. A grid of workspace.inputs that no other frame shares
 /// is taken over instead of copied (the input is not used after this).
 void
@@ -257,7 +247,7 @@ void
 runFilter(const std::vector<const Grid*>& given, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
 {
-  workspace.profiled_grids.clear();
+  workspace.profiled = nullptr;
   if (given.empty() || center < 0 || center >= static_cast<int>(given.size()) || !given[center]) {
     detail::runContiguous(given, center, parameters, viewpoint, active, workspace);
     return;
@@ -271,19 +261,22 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   Grid as_given;
   if (parameters.fill_holes > 0)
     as_given = *given[center];
-  startGivenProfiles(given, center, workspace);
+  // The current frame's profile starts unknown; the other frames' are estimated where they are
+  // used, each with a sample of its own.
+  workspace.profiled = given[center];
+  workspace.current_profile = NoiseProfile();
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
     NoiseProfile none;
     const NoiseProfile* profile = &none;
     try {
-      profile = &detail::givenFrameProfile(*given[center], center, parameters, viewpoint, workspace);
+      profile = &detail::currentFrameProfile(*given[center], parameters, viewpoint, workspace);
     } catch (const UnfilterableFrame&) {
       // Too few points for a noise estimate: nothing to test against (runContiguous reports it).
     }
     frames[center] = detail::correctOutliersStage(*given[center], *profile, parameters, viewpoint, active, workspace);
-    workspace.profiled_grids[center] = frames[center];
+    workspace.profiled = frames[center];
   }
   {
     detail::StageTracker stage(workspace.observer, 0);
@@ -292,7 +285,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   }
   // A levelled frame keeps its noise profile: the levelling moves its points by a slowly varying
   // offset along the rays, which the local planes of the estimate take up.
-  workspace.profiled_grids[center] = frames[center];
+  workspace.profiled = frames[center];
   const int scales = detail::usableScales(*frames[center], parameters);
   if (scales > 1 && frames[center]->countValid() > 0)
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
@@ -305,7 +298,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     stage.start(Stage::hole_filling);
     detail::fillHoles(as_given, parameters, viewpoint, active, workspace);
   }
-  workspace.profiled_grids.clear();
+  workspace.profiled = nullptr;
 }
 
 void

@@ -70,13 +70,12 @@ struct Workspace
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// The current frame's noise profile as the running call was given the frame, estimated once
-  /// per call (by the outlier stage, or by the first pass): per frame of the call, the grid the
-  /// profile stands for (null: none; only the current frame's is set) and the profile (empty: not
-  /// yet estimated). It stands for the frame after the outlier stage and the levelling too: moving
-  /// a few isolated points, or all points by a slowly varying offset along their rays, does not
-  /// change the frame's noise.
-  std::vector<const Grid*> profiled_grids;
-  std::vector<NoiseProfile> given_profiles;
+  /// per call (by the outlier stage, or by the first pass): the grid it stands for (null: none)
+  /// and the profile (empty: not yet estimated). It stands for the frame after the outlier stage
+  /// and the levelling too: moving a few isolated points, or all points by a slowly varying offset
+  /// along their rays, does not change the frame's noise.
+  const Grid* profiled = nullptr;
+  NoiseProfile current_profile;
   /// If set, told where each phase of a run begins and ends. Not owned.
   StageObserver* observer = nullptr;
 };

@@ -47,6 +47,14 @@ numberText(double value)
   return s.str();
 }
 
+/// Whether `point` lies within the range gate of a point at range `range` (on its side of a
+/// depth edge).
+bool
+withinRangeGate(const Eigen::Vector3d& point, double range, const RayReprojectionParameters& parameters)
+{
+  return std::fabs(point.norm() - range) <= parameters.range_gate * range;
+}
+
 /// The unit normal of the plane fitted (least squares) to the filtered points of the window
 /// around pixel (u, v) whose range is within range_gate of the range of `centre` (the filtered
 /// surface on the point's side of a depth edge); zero if fewer than kMinimumFitPoints are.
@@ -68,7 +76,7 @@ surfaceNormal(const Cloud& filtered, int u, int v, const Eigen::Vector3d& centre
         continue;
       // Relative to the centre: the moments stay well conditioned far from the origin.
       const Eigen::Vector3d x = vectorOf(f) - centre;
-      if (std::fabs((x + centre).norm() - range) > parameters.range_gate * range)
+      if (!withinRangeGate(x + centre, range, parameters))
         continue;
       sum += x;
       second += x * x.transpose();
@@ -126,7 +134,7 @@ planeAngleSpread(const Cloud& filtered, const std::vector<Eigen::Vector3d>& norm
       if ((a == 0 && b == 0) || x < 0 || y < 0 || x >= w || y >= h)
         continue;
       const std::size_t j = static_cast<std::size_t>(y) * w + x;
-      if (normals[j].isZero() || std::fabs(vectorOf(filtered[j]).norm() - range) > parameters.range_gate * range)
+      if (normals[j].isZero() || !withinRangeGate(vectorOf(filtered[j]), range, parameters))
         continue;
       sum += normals[j].cross(n).squaredNorm();
       ++count;

@@ -38,10 +38,8 @@ estimateFrame(FrameContext& ctx, int k, const Grid& g, const NormalField* normal
   if (ctx.adaptive) {
     // The current frame's first pass uses the profile the outlier stage estimated on it (the same
     // sample), so that a frame's noise is estimated once per call.
-    const std::vector<const Grid*>& given = ctx.workspace.profiled_grids;
-    const bool as_given = k == ctx.center && ctx.iteration == 0 && static_cast<std::size_t>(k) < given.size() &&
-                          given[k] == ctx.frames[k];
-    ctx.profiles[k] = as_given ? givenFrameProfile(g, k, parameters, ctx.viewpoint, ctx.workspace)
+    const bool as_given = k == ctx.center && ctx.iteration == 0 && ctx.frames[k] == ctx.workspace.profiled;
+    ctx.profiles[k] = as_given ? currentFrameProfile(g, parameters, ctx.viewpoint, ctx.workspace)
                                : estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed,
                                                       ctx.viewpoint, ctx.threads);
     Bandwidths b;
@@ -64,10 +62,10 @@ estimateFrame(FrameContext& ctx, int k, const Grid& g, const NormalField* normal
 } // namespace detail
 
 const NoiseProfile&
-detail::givenFrameProfile(const Grid& frame, int k, const FilterParameters& parameters, const Viewpoint& viewpoint,
-                          Workspace& workspace)
+detail::currentFrameProfile(const Grid& frame, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                            Workspace& workspace)
 {
-  NoiseProfile& profile = workspace.given_profiles.at(static_cast<std::size_t>(k));
+  NoiseProfile& profile = workspace.current_profile;
   if (profile.empty())
     profile = estimateNoiseProfile(frame, parameters.search_window, parameters.bandwidth_samples, parameters.seed,
                                    viewpoint, resolveThreads(parameters.threads));

@@ -482,8 +482,8 @@ fillHoles(const Grid& input, const FilterParameters& parameters, const Viewpoint
     if (before.valid[i] && before.z[i] - viewpoint[2] > 0.0f)
       frame.w[i] = 1.0f / (before.z[i] - viewpoint[2]);
   try {
-    frame.profile = estimateNoiseProfile(input, parameters.search_window, parameters.bandwidth_samples,
-                                         parameters.seed, viewpoint, threads);
+    // `input` is the current frame as the call was given it: its profile is known once estimated.
+    frame.profile = currentFrameProfile(input, parameters, viewpoint, workspace);
   } catch (const std::invalid_argument&) {
     // Too few points for a profile: the thresholds fall back to their floors.
   }

@@ -280,10 +280,9 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
   stage.start(Stage::pyramid);
   NoiseProfile profile;
   try {
-    // The frame as the call was given it: its profile is known once estimated (givenFrameProfile).
-    const std::vector<const Grid*>& given = workspace.profiled_grids;
-    profile = static_cast<std::size_t>(center) < given.size() && given[center] == &input
-                  ? givenFrameProfile(input, center, parameters, viewpoint, workspace)
+    // The frame as the call was given it: its profile is known once estimated.
+    profile = &input == workspace.profiled
+                  ? currentFrameProfile(input, parameters, viewpoint, workspace)
                   : estimateNoiseProfile(input, parameters.search_window, parameters.bandwidth_samples,
                                          parameters.seed, viewpoint, threads);
   } catch (const UnfilterableFrame&) {

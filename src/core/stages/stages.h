@@ -13,12 +13,12 @@ namespace detail
 
 // Once per call, on the frames as given (runFilter).
 
-/// The noise profile of frame k of the call as given (workspace.given_profiles[k]): estimated on
-/// `frame` (frame k, or the current frame's copy) the first time, known afterwards. Throws
+/// The current frame's noise profile as the call was given the frame (workspace.current_profile):
+/// estimated on `frame` (the frame, or its copy) the first time, known afterwards. Throws
 /// UnfilterableFrame as estimateNoiseProfile does. (frame_bandwidths.cpp)
 const NoiseProfile&
-givenFrameProfile(const Grid& frame, int k, const FilterParameters& parameters, const Viewpoint& viewpoint,
-                  Workspace& workspace);
+currentFrameProfile(const Grid& frame, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                    Workspace& workspace);
 
 /// The current frame `input` with its isolated outliers moved onto their neighbours' surface
 /// (FilterParameters::outlier_sigmas) as tested against `profile` (its noise profile; empty:
