@@ -79,8 +79,9 @@ constexpr float kBilateralSigmaS = 5.0f, kBilateralSigmaR = 0.03f;
 constexpr double kStaticTargetMs = 30.0, kTemporalTargetMs = 1000.0, kSequenceTargetMb = 200.0;
 // The preset as users run it on a VGA frame: 30 frames per second.
 constexpr double kRealTimeTargetMs = 33.0;
-// The temporal filter with the preset (radius 1, three frames) against the static one per frame.
-constexpr double kTemporalOverStatic = 2.0;
+// The temporal filter with the preset (radius 1, three frames) against the static one per frame:
+// a camera-rate stream must not lose most of its rate to the neighbour frames.
+constexpr double kTemporalOverStatic = 1.3;
 
 double
 megabytes(std::uint64_t bytes)
@@ -876,15 +877,24 @@ evaluateTargets(const Settings& s, const std::vector<Row>& rows, const SequenceM
     targets.push_back({"preset fast vs FastBilateralFilterOMP, same run", preset->median_ms,
                        preset_fbf->median_ms, "ms", "<=", "FastBilateralFilterOMP",
                        preset->median_ms <= preset_fbf->median_ms});
-  // The temporal filter (radius 1) with the preset: at most twice the static filter's time on its
-  // centre frame, in the same rounds.
+  // The temporal filter (radius 1) with the preset: at most 1.3 times the static filter's time on
+  // its centre frame, in the same rounds.
   const std::string preset_temporal = "temporal " + s.preset + " ";
   const Row* temporal_preset = findRow(rows, "range_nlm temporal fast", preset_temporal);
   const Row* temporal_static = findRow(rows, "range_nlm fast", preset_temporal);
-  if (temporal_preset && temporal_static)
-    targets.push_back({"preset temporal fast (radius 1) vs 2 x static on its centre frame, same run",
-                       temporal_preset->median_ms, kTemporalOverStatic * temporal_static->median_ms, "ms", "<=",
-                       "2 x static", temporal_preset->median_ms <= kTemporalOverStatic * temporal_static->median_ms});
+  const Row* temporal_fbf = findRow(rows, "pcl FastBilateralFilterOMP", preset_temporal);
+  // FastBilateralFilterOMP's time depends on the frame's depth range (its grid), so the comparison
+  // is made on the sequence's centre frame as well as on the static frame.
+  if (temporal_static && temporal_fbf)
+    targets.push_back({"preset fast vs FastBilateralFilterOMP on the sequence's centre frame, same run",
+                       temporal_static->median_ms, temporal_fbf->median_ms, "ms", "<=", "FastBilateralFilterOMP",
+                       temporal_static->median_ms <= temporal_fbf->median_ms});
+  if (temporal_preset && temporal_static) {
+    const double limit = kTemporalOverStatic * temporal_static->median_ms;
+    targets.push_back({"preset temporal fast (radius 1) vs 1.3 x static on its centre frame, same run",
+                       temporal_preset->median_ms, limit, "ms", "<=", "1.3 x static",
+                       temporal_preset->median_ms <= limit});
+  }
   const std::string paper_static = "static " + std::to_string(kStaticSearch) + "x";
   const Row* fast = findRow(rows, "range_nlm fast", paper_static);
   const Row* fbf = findRow(rows, "pcl FastBilateralFilterOMP", paper_static);
