@@ -41,7 +41,8 @@ struct Workspace
   Grid smooth;
   /// Dilated passes: the frames of one phase, the merged result of all phases, and the
   /// workspace of the phases' runs (one element once used).
-  std::vector<Grid> phase_frames;
+  std::vector<std::vector<Grid>> phase_frames; // per thread of the phases side by side
+  std::vector<std::vector<unsigned char>> phase_active;
   Grid merged;
   std::vector<Workspace> phase;
   /// Multiscale runs: the frames reduced to the next coarser scale, the current frame's fine

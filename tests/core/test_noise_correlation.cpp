@@ -246,3 +246,69 @@ TEST(Dilation, DefaultRunIsTheSameForAnyThreadCountAndAReusedWorkspace)
     }
   }
 }
+
+namespace
+{
+/// Counts the stages it sees begin.
+class StageCounter : public StageObserver
+{
+public:
+  void begin(Stage stage, int) override { ++counts[static_cast<int>(stage)]; }
+  void end(Stage, int) override {}
+  int count(Stage stage) const { return counts[static_cast<int>(stage)]; }
+
+private:
+  int counts[kStageCount] = {};
+};
+} // namespace
+
+// With two threads and no stage observer the four phases of the dilated passes run side by side,
+// one thread each, in workspaces of their own; with an observer (which must see each phase's
+// stages in turn) they run one after the other with both threads. Both give the same bits: alone
+// with a selection of points and the uncertainty (whose phase values are merged too), and as the
+// middle frame of three, on a frame with holes and borders.
+TEST(Dilation, PhasesSideBySideGiveTheBitsOfThePhasesInTurn)
+{
+  SceneOptions o = planeScene("stereo", 320, 240);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  o.frames = 3;
+  const auto sequence = renderSequence(o);
+  std::vector<Grid> frames;
+  for (const auto& frame : sequence)
+    frames.push_back(gridOf(frame.noisy));
+  ASSERT_EQ(automaticDilation(frames[1]), 2);
+  std::vector<unsigned char> active(frames[1].size(), 0);
+  for (std::size_t i = 0; i < active.size(); i += 3)
+    active[i] = 1;
+  FilterParameters p = FilterParameters::recommended();
+  p.threads = 2;
+  FilterParameters with_uncertainty = p;
+  with_uncertainty.uncertainty = true;
+  struct Case
+  {
+    std::vector<const Grid*> frames;
+    int center;
+    const FilterParameters* parameters;
+    const std::vector<unsigned char>* active;
+  };
+  const std::vector<unsigned char> all;
+  const std::vector<Case> cases{{{&frames[1]}, 0, &with_uncertainty, &active},
+                                {{&frames[0], &frames[1], &frames[2]}, 1, &p, &all}};
+  for (const Case& c : cases) {
+    StageCounter counter;
+    FilterWorkspace in_turn, side_by_side;
+    in_turn.setStageObserver(&counter);
+    runFilter(c.frames, c.center, *c.parameters, kOrigin, *c.active, in_turn);
+    runFilter(c.frames, c.center, *c.parameters, kOrigin, *c.active, side_by_side);
+    // The observer saw the four phases' offsets and the last pass's.
+    EXPECT_EQ(counter.count(Stage::offsets), 5) << c.frames.size() << " frames";
+    EXPECT_TRUE(sameBits(in_turn.result().output, side_by_side.result().output)) << c.frames.size() << " frames";
+    EXPECT_FALSE(sameBits(side_by_side.result().output, *c.frames[c.center])) << c.frames.size() << " frames";
+    if (c.parameters->uncertainty) {
+      ASSERT_EQ(in_turn.result().uncertainty.size(), side_by_side.result().uncertainty.size());
+      EXPECT_EQ(0, std::memcmp(in_turn.result().uncertainty.data(), side_by_side.result().uncertainty.data(),
+                               in_turn.result().uncertainty.size() * sizeof(float)));
+    }
+  }
+}

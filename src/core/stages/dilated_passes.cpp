@@ -4,7 +4,10 @@
 
 #include "../tuned.h"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <exception>
 #include <limits>
 
 namespace range_nlm
@@ -155,6 +158,138 @@ detail::chooseDilation(const Grid& input, const FilterParameters& parameters, St
   return empty ? 1 : k;
 }
 
+namespace detail
+{
+namespace
+{
+
+/// What every phase of one run shares: the frames, the parameters of the phases' runs and where
+/// their results go.
+struct PhaseRun
+{
+  const std::vector<const Grid*>& frames;
+  int center;
+  const FilterParameters& parameters; // the run's
+  const FilterParameters& coarse;     // the phases'
+  const Viewpoint& viewpoint;
+  const std::vector<unsigned char>& active;
+  int k;
+  Workspace& workspace; // merged, prior_sigma, phase_uncertainty
+};
+
+/// Buffers of one phase at a time: its frames, its selection and its workspace.
+struct PhaseBuffers
+{
+  std::vector<Grid>* frames;
+  std::vector<unsigned char>* active;
+  Workspace* workspace;
+};
+
+/// Phase (u0, v0): the frames subsampled, the contiguous run on them and the result merged back
+/// (with `threads` threads); a phase with too few points to filter keeps them.
+void
+filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, int threads, StageTracker* split)
+{
+  const Grid& input = *run.frames[run.center];
+  std::vector<Grid>& sub = *buffers.frames;
+  sub.resize(run.frames.size());
+  std::vector<const Grid*> sub_frames(run.frames.size());
+  for (std::size_t f = 0; f < run.frames.size(); ++f) {
+    subsample(*run.frames[f], run.k, u0, v0, sub[f], threads);
+    sub_frames[f] = &sub[f];
+  }
+  if (!run.active.empty())
+    subsample(run.active, input.width, input.height, run.k, u0, v0, *buffers.active, threads);
+  else
+    buffers.active->clear();
+  Workspace& phase = *buffers.workspace;
+  if (split)
+    split->stop();
+  try {
+    runContiguous(sub_frames, run.center, run.coarse, run.viewpoint, *buffers.active, phase);
+  } catch (const UnfilterableFrame&) {
+    if (split)
+      split->start(Stage::dilation);
+    return;
+  }
+  if (split)
+    split->start(Stage::dilation);
+  // Each phase writes its own pixels only, so phases may merge side by side.
+  Workspace& workspace = run.workspace;
+  mergePhase(phase.run.output, run.k, u0, v0, workspace.merged, threads);
+  if (run.parameters.uncertainty) {
+    mergePhaseValues(phase.height_sigma, phase.run.output, run.k, u0, v0, input.width, workspace.prior_sigma,
+                     threads);
+    mergePhaseValues(phase.run.uncertainty, phase.run.output, run.k, u0, v0, input.width,
+                     workspace.phase_uncertainty, threads);
+  }
+}
+
+/// The buffers of the phases filtered by thread t of `workspace` (in turn: t = 0).
+PhaseBuffers
+phaseBuffers(Workspace& workspace, std::size_t t)
+{
+  return PhaseBuffers{&workspace.phase_frames[t], &workspace.phase_active[t], &workspace.phase[t]};
+}
+
+/// The phases one after the other, each with all threads; the stage observer sees each phase's
+/// stages.
+void
+filterPhasesInTurn(const PhaseRun& run, int threads, StageTracker& split)
+{
+  const Grid& input = *run.frames[run.center];
+  Workspace& workspace = run.workspace;
+  workspace.phase.resize(1);
+  workspace.phase_frames.resize(1);
+  workspace.phase_active.resize(1);
+  Workspace& phase = workspace.phase.front();
+  phase.observer = workspace.observer;
+  phase.frames_moved = workspace.frames_moved;
+  for (int v0 = 0; v0 < std::min(run.k, input.height); ++v0)
+    for (int u0 = 0; u0 < std::min(run.k, input.width); ++u0)
+      filterPhase(run, u0, v0, phaseBuffers(workspace, 0), threads, &split);
+}
+
+/// The phases side by side, one thread each (every thread a whole phase at a time, each in its
+/// own workspace): the phases' parallel loops, and the barriers that end them, are gone. That
+/// matters most when other processes keep the cores busy, where a descheduled thread holds the
+/// other one at every barrier. The result is the same bits as filterPhasesInTurn: a phase's run
+/// does not depend on the number of threads, and phases write disjoint pixels.
+void
+filterPhasesSideBySide(const PhaseRun& run, int threads)
+{
+  const Grid& input = *run.frames[run.center];
+  Workspace& workspace = run.workspace;
+  const int columns = std::min(run.k, input.width), rows = std::min(run.k, input.height);
+  const int count = columns * rows;
+  const std::size_t workers = static_cast<std::size_t>(threads);
+  workspace.phase.resize(workers);
+  workspace.phase_frames.resize(workers);
+  workspace.phase_active.resize(workers);
+  for (Workspace& phase : workspace.phase) {
+    phase.observer = nullptr;
+    phase.frames_moved = workspace.frames_moved;
+  }
+  // An error other than an unfilterable phase leaves the parallel loop as a value; the first
+  // phase's (in the order filterPhasesInTurn takes them) is rethrown, as it would have been.
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(count));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (int p = 0; p < count; ++p) {
+    try {
+      const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+      filterPhase(run, p % columns, p / columns, phaseBuffers(workspace, t), 1, nullptr);
+    } catch (...) {
+      errors[static_cast<std::size_t>(p)] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& error : errors)
+    if (error)
+      std::rethrow_exception(error);
+}
+
+} // namespace
+} // namespace detail
+
 void
 detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
                          const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace,
@@ -172,45 +307,24 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
   coarse.iterations = std::max(1, parameters.iterations - 1);
   const int threads = resolveThreads(parameters.threads);
   // Kept in the workspace: the next run on frames of this size allocates nothing here.
-  Grid& result = workspace.merged;
-  copyGrid(input, result, threads);
+  copyGrid(input, workspace.merged, threads);
   // With the uncertainty: the phases' heights' sigma (the last pass starts from it) and their
   // sigma along the moves; NaN where a phase kept its points unfiltered.
   if (parameters.uncertainty) {
     workspace.prior_sigma.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
     workspace.phase_uncertainty.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
   }
-  std::vector<Grid>& sub = workspace.phase_frames;
-  sub.resize(frames.size());
-  std::vector<const Grid*> sub_frames(frames.size());
-  std::vector<unsigned char> sub_active;
-  workspace.phase.resize(1);
-  Workspace& phase = workspace.phase.front();
-  phase.observer = workspace.observer;
-  phase.frames_moved = workspace.frames_moved;
-  for (int v0 = 0; v0 < std::min(k, input.height); ++v0)
-    for (int u0 = 0; u0 < std::min(k, input.width); ++u0) {
-      for (std::size_t f = 0; f < frames.size(); ++f) {
-        subsample(*frames[f], k, u0, v0, sub[f], threads);
-        sub_frames[f] = &sub[f];
-      }
-      if (!active.empty())
-        subsample(active, input.width, input.height, k, u0, v0, sub_active, threads);
-      split.stop();
-      try {
-        runContiguous(sub_frames, center, coarse, viewpoint, sub_active, phase);
-      } catch (const UnfilterableFrame&) {
-        split.start(Stage::dilation);
-        continue; // this phase keeps its points
-      }
-      split.start(Stage::dilation);
-      mergePhase(phase.run.output, k, u0, v0, result, threads);
-      if (parameters.uncertainty) {
-        mergePhaseValues(phase.height_sigma, phase.run.output, k, u0, v0, input.width, workspace.prior_sigma, threads);
-        mergePhaseValues(phase.run.uncertainty, phase.run.output, k, u0, v0, input.width,
-                         workspace.phase_uncertainty, threads);
-      }
-    }
+  const PhaseRun run{frames, center, parameters, coarse, viewpoint, active, k, workspace};
+  const int phases = std::min(k, input.width) * std::min(k, input.height);
+  // Side by side where every thread gets as many phases as the others, without a stage observer
+  // (whose stages would interleave), and when a last pass follows: with one iteration the run
+  // reports the last phase's bandwidths, which only the phases in turn keep.
+  if (threads > 1 && phases % threads == 0 && !workspace.observer && parameters.iterations > 1) {
+    FilterParameters single = coarse;
+    single.threads = 1;
+    filterPhasesSideBySide(PhaseRun{frames, center, parameters, single, viewpoint, active, k, workspace}, threads);
+  } else
+    filterPhasesInTurn(run, threads, split);
   split.stop();
   finishDilatedPasses(frames, center, parameters, viewpoint, active, workspace);
 }
