@@ -1,6 +1,7 @@
 #include "cli/cli.h"
 #include "cli/pipeline.h"
 
+#include <range_nlm/io/process_memory.h>
 #include <range_nlm/parameter_registry.h>
 
 #include <pcl/common/io.h>
@@ -181,6 +182,8 @@ int
 runTool(const std::string& tool, const std::function<int()>& body)
 {
   reserveStandardDescriptors();
+  // Before the first frame's buffers (io/process_memory.h).
+  io::preferHugePagesForBuffers();
   limitEnvironmentThreads(tool);
   // PCL's own console messages would add lines to our one-line errors.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
