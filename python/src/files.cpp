@@ -4,6 +4,7 @@
 
 #include <range_nlm/eval/render.h>
 #include <range_nlm/io/pcd_file.h>
+#include <range_nlm/io/process_memory.h>
 
 #include <pybind11/stl.h>
 
@@ -169,6 +170,19 @@ bindFiles(py::module_& m)
   m.def("read_depth_png", &readDepth, py::arg("path"), "Reads a 16-bit greyscale PNG as an H x W uint16 array.");
   m.def("write_depth_png", &writeDepth, py::arg("path"), py::arg("depth"),
         "Writes an H x W uint16 array as a 16-bit greyscale PNG, atomically.");
+  m.def(
+      "prefer_huge_pages",
+      [] {
+        const io::HeapSetup setup = io::preferHugePagesForBuffers();
+        py::dict result;
+        result["heap_below_bytes"] = setup.heap_below_bytes;
+        result["marked_bytes"] = setup.marked_bytes;
+        return result;
+      },
+      "Keeps the process's frame-sized buffers on a heap that is not given back between calls and is "
+      "marked for transparent huge pages (what range_nlm's tools do at start; process-wide, so call it "
+      "once, early). Returns the mmap threshold set and the bytes marked, both 0 where the allocator "
+      "is not glibc's or refuses.");
   m.def("render_before_after", &renderBeforeAfter, py::arg("before"), py::arg("after"), py::arg("path"),
         py::arg("mode") = "shaded", py::arg("curvature_limit") = 0.0f,
         "Draws two H x W x 3 frames side by side on one scale into a PNG (range_nlm_render --before --after); "

@@ -57,3 +57,13 @@ def test_render_before_after_writes_a_picture(tmp_path):
     assert limit > 0
     with open(tmp_path / "ba.png", "rb") as f:
         assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_prefer_huge_pages_sets_up_the_heap_and_changes_no_result():
+    points = plane(width=64, height=48)
+    before = range_nlm.denoise(points)
+    setup = range_nlm.prefer_huge_pages()
+    # glibc (Debian's Python): buffers below 32 MiB come from the heap.
+    assert setup["heap_below_bytes"] == 32 << 20
+    assert setup["marked_bytes"] >= 0
+    assert np.array_equal(bits(range_nlm.denoise(points)), bits(before))
