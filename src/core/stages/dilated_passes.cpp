@@ -314,16 +314,17 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
     workspace.prior_sigma.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
     workspace.phase_uncertainty.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
   }
-  const PhaseRun run{frames, center, parameters, coarse, viewpoint, active, k, workspace};
-  const int phases = std::min(k, input.width) * std::min(k, input.height);
   // Side by side where every thread gets as many phases as the others, without a stage observer
   // (whose stages would interleave), and when a last pass follows: with one iteration the run
   // reports the last phase's bandwidths, which only the phases in turn keep.
-  if (threads > 1 && phases % threads == 0 && !workspace.observer && parameters.iterations > 1) {
-    FilterParameters single = coarse;
-    single.threads = 1;
-    filterPhasesSideBySide(PhaseRun{frames, center, parameters, single, viewpoint, active, k, workspace}, threads);
-  } else
+  const int phases = std::min(k, input.width) * std::min(k, input.height);
+  const bool side_by_side = threads > 1 && phases % threads == 0 && !workspace.observer && parameters.iterations > 1;
+  if (side_by_side)
+    coarse.threads = 1; // each phase's run on its own thread
+  const PhaseRun run{frames, center, parameters, coarse, viewpoint, active, k, workspace};
+  if (side_by_side)
+    filterPhasesSideBySide(run, threads);
+  else
     filterPhasesInTurn(run, threads, split);
   split.stop();
   finishDilatedPasses(frames, center, parameters, viewpoint, active, workspace);
