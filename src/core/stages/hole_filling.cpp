@@ -1,6 +1,6 @@
 // Stage::hole_filling (FilterParameters::fill_holes): holes filled from non-local candidates whose
-// patches match the hole's border, on the hole's farthest depth level (docs/method.md, "Hole
-// filling").
+// patches match the hole's border, each pixel on the depth level its row and column runs give it
+// (docs/method.md, "Hole filling").
 //
 // Everything is computed in inverse depth w = 1 / (z - viewpoint z). On a plane seen by a pinhole
 // camera w is an affine function of the pixel coordinates, so a patch of a plane shifted by t
@@ -11,6 +11,7 @@
 #include "stages.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <deque>
@@ -266,32 +267,117 @@ inverseDepthSigma(const FillFrame& f, int i)
   return sigma / (dz * dz);
 }
 
-/// The border pixels of the depth level the hole is filled from, and the edge threshold in
-/// inverse depth (at the level's median). The border splits into levels where its sorted inverse
+/// A depth level of the pixels around a hole: its pixels (sorted) and the edge threshold in
+/// inverse depth at its median.
+struct Level
+{
+  std::vector<int> pixels;
+  float threshold = 0.0f;
+  bool holds(int i) const { return std::binary_search(pixels.begin(), pixels.end(), i); }
+};
+
+/// The depth levels of `around` (valid pixels), farthest first: split where their sorted inverse
 /// depths jump by more than the edge threshold; levels of fewer than kMinLevelPixels pixels are
-/// stray points. Of the others, the farthest: a stereo or time-of-flight shadow lies on the
-/// background, beside the edge of the foreground that casts it. Empty if no level qualifies.
-std::vector<int>
-chooseLevel(const FillFrame& f, std::vector<int> border, const RayModel& rays, float& threshold)
+/// stray points and left out.
+std::vector<Level>
+splitLevels(const FillFrame& f, std::vector<int> around, const RayModel& rays)
 {
   // Farthest first: the smallest inverse depth.
-  std::sort(border.begin(), border.end(), [&](int a, int b) { return f.w[a] < f.w[b] || (f.w[a] == f.w[b] && a < b); });
+  std::sort(around.begin(), around.end(), [&](int a, int b) { return f.w[a] < f.w[b] || (f.w[a] == f.w[b] && a < b); });
   const auto edge = [&](int i) {
     const float depth = 1.0f / f.w[i];
     return std::max(kEdgeSigmas * inverseDepthSigma(f, i), kEdgeFootprints * rays.pitch() / depth);
   };
-  for (std::size_t begin = 0, end = 0; begin < border.size(); begin = end) {
+  std::vector<Level> levels;
+  for (std::size_t begin = 0, end = 0; begin < around.size(); begin = end) {
     end = begin + 1;
-    while (end < border.size() && f.w[border[end]] - f.w[border[end - 1]] <= edge(border[end]))
+    while (end < around.size() && f.w[around[end]] - f.w[around[end - 1]] <= edge(around[end]))
       ++end;
-    if (end - begin >= static_cast<std::size_t>(kMinLevelPixels)) {
-      std::vector<int> level(border.begin() + begin, border.begin() + end);
-      threshold = edge(level[level.size() / 2]);
-      std::sort(level.begin(), level.end());
-      return level;
-    }
+    if (end - begin < static_cast<std::size_t>(kMinLevelPixels))
+      continue;
+    Level level;
+    level.pixels.assign(around.begin() + begin, around.begin() + end);
+    level.threshold = edge(level.pixels[level.pixels.size() / 2]);
+    std::sort(level.pixels.begin(), level.pixels.end());
+    levels.push_back(std::move(level));
   }
-  return {};
+  return levels;
+}
+
+/// The first valid pixel from hole pixel i in steps of (du, dv), or -1 at the frame's edge;
+/// `steps` is how many steps it took.
+int
+endOfRun(const Grid& g, int i, int du, int dv, int& steps)
+{
+  int u = i % g.width, v = i / g.width;
+  for (steps = 1;; ++steps) {
+    u += du, v += dv;
+    if (u < 0 || v < 0 || u >= g.width || v >= g.height)
+      return -1;
+    if (g.valid[v * g.width + u])
+      return v * g.width + u;
+  }
+}
+
+/// The ends of the runs of invalid pixels through each pixel of `piece` along its row and its
+/// column: (left, right, up, down) per pixel, -1 at the frame's edge, and each run's length.
+struct RunEnds
+{
+  std::vector<std::array<int, 4>> ends;
+  std::vector<std::array<int, 2>> lengths; // row, column
+};
+
+RunEnds
+runEndsOf(const Grid& g, const Hole& piece)
+{
+  RunEnds r;
+  for (int i : piece.pixels) {
+    int left = 0, right = 0, up = 0, down = 0;
+    std::array<int, 4> e{endOfRun(g, i, -1, 0, left), endOfRun(g, i, 1, 0, right), endOfRun(g, i, 0, -1, up),
+                         endOfRun(g, i, 0, 1, down)};
+    r.ends.push_back(e);
+    r.lengths.push_back({left + right - 1, up + down - 1});
+  }
+  return r;
+}
+
+/// The level each pixel of the piece is filled from (an index into `levels`, -1 for none), from
+/// the levels at the ends of its row and column runs. A run whose two ends lie on one level spans
+/// the hole on that surface: the surface goes on under the hole (a dark patch on a foreground
+/// object, also where it reaches the object's silhouette). Without one, the farther end of the
+/// shorter run: the hole lies on the occluded side of a depth edge, as a shadow beside a
+/// foreground does. The shorter run is the more local evidence; of two spanning runs too. An end
+/// on no level (a stray point, or farther from the piece than aroundOf reaches) counts for nothing.
+std::vector<int>
+assignLevels(const RunEnds& runs, const std::vector<Level>& levels)
+{
+  const auto levelOf = [&](int i) {
+    if (i < 0)
+      return -1;
+    for (std::size_t k = 0; k < levels.size(); ++k)
+      if (levels[k].holds(i))
+        return static_cast<int>(k);
+    return -1; // a stray point
+  };
+  std::vector<int> assigned(runs.ends.size(), -1);
+  for (std::size_t p = 0; p < runs.ends.size(); ++p) {
+    int spanning = -1, spanning_length = 0, open = -1, open_length = 0;
+    for (int run = 0; run < 2; ++run) {
+      const int a = levelOf(runs.ends[p][2 * run]), b = levelOf(runs.ends[p][2 * run + 1]);
+      const int length = runs.lengths[p][run];
+      if (a >= 0 && a == b) {
+        if (spanning < 0 || length < spanning_length)
+          spanning = a, spanning_length = length;
+      } else if (a >= 0 || b >= 0) {
+        // Levels are farthest first: the smaller index of the ends present.
+        const int farther = a < 0 ? b : (b < 0 ? a : std::min(a, b));
+        if (open < 0 || length < open_length)
+          open = farther, open_length = length;
+      }
+    }
+    assigned[p] = spanning >= 0 ? spanning : open;
+  }
+  return assigned;
 }
 
 /// One candidate: the shift t of the hole's patch, its distance and the offset that carries its
@@ -304,39 +390,80 @@ struct Candidate
 };
 
 /// The hole's patch: its border level (`known`) and its pixels (`unknown`), as offsets from the
-/// hole's first pixel, and the pairs of 4-neighbours within it, which must not straddle a depth
-/// edge in a candidate.
+/// hole's first pixel, and the pairs of 4-neighbours within it along rows and along columns,
+/// which must not straddle a depth edge in a candidate.
 struct Patch
 {
   std::vector<int> known, unknown;
-  std::vector<std::pair<int, int>> pairs;
+  std::vector<std::pair<int, int>> row_pairs, column_pairs;
+  /// The level's inverse depth per pixel along a row and along a column (its least-squares
+  /// plane): a slanted surface (a floor seen from low) steps by this much from pixel to pixel
+  /// without an edge.
+  float step_u = 0.0f, step_v = 0.0f;
   int u0, v0, u1, v1; // extent of the patch, frame coordinates
 };
 
-Patch
-makePatch(const Grid& g, const Hole& hole, const std::vector<int>& level)
+/// The least-squares plane w = a + b u + c v of the inverse depths of `pixels`: (b, c), exact on a
+/// plane seen by a pinhole camera; zero if the pixels do not span the image plane.
+void
+inverseDepthSteps(const FillFrame& f, const std::vector<int>& pixels, float& step_u, float& step_v)
 {
+  const int width = f.grid.width;
+  double a[3][3] = {}, b[3] = {}, x[3] = {0.0, 0.0, 0.0};
+  for (int i : pixels) {
+    const double c[3] = {1.0, double(i % width), double(i / width)};
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k)
+        a[r][k] += c[r] * c[k];
+      b[r] += c[r] * f.w[i];
+    }
+  }
+  if (!solve3(a, b, x))
+    x[1] = x[2] = 0.0;
+  step_u = static_cast<float>(x[1]);
+  step_v = static_cast<float>(x[2]);
+}
+
+Patch
+makePatch(const FillFrame& f, const std::vector<int>& unknown, const std::vector<int>& level)
+{
+  const Grid& g = f.grid;
   Patch p;
   p.known = level;
-  p.unknown = hole.pixels;
+  p.unknown = unknown;
+  inverseDepthSteps(f, level, p.step_u, p.step_v);
   p.u0 = p.v0 = std::numeric_limits<int>::max();
   p.u1 = p.v1 = std::numeric_limits<int>::min();
   std::vector<int> all = level;
-  all.insert(all.end(), hole.pixels.begin(), hole.pixels.end());
+  all.insert(all.end(), unknown.begin(), unknown.end());
   std::sort(all.begin(), all.end());
   for (int i : all) {
     const int u = i % g.width, v = i / g.width;
     p.u0 = std::min(p.u0, u), p.u1 = std::max(p.u1, u), p.v0 = std::min(p.v0, v), p.v1 = std::max(p.v1, v);
     if (u + 1 < g.width && std::binary_search(all.begin(), all.end(), i + 1))
-      p.pairs.emplace_back(i, i + 1);
+      p.row_pairs.emplace_back(i, i + 1);
     if (std::binary_search(all.begin(), all.end(), i + g.width))
-      p.pairs.emplace_back(i, i + g.width);
+      p.column_pairs.emplace_back(i, i + g.width);
   }
   return p;
 }
 
+/// Whether the patch shifted by `shift` straddles a depth edge: 4-neighbours whose inverse depths
+/// differ from the level's step by more than `threshold`.
+bool
+straddlesEdge(const FillFrame& f, const Patch& p, int shift, float threshold)
+{
+  for (const auto& pair : p.row_pairs)
+    if (std::abs(f.w[pair.second + shift] - f.w[pair.first + shift] - p.step_u) > threshold)
+      return true;
+  for (const auto& pair : p.column_pairs)
+    if (std::abs(f.w[pair.second + shift] - f.w[pair.first + shift] - p.step_v) > threshold)
+      return true;
+  return false;
+}
+
 /// The kCandidates shifts within `reach` pixels whose patch, wholly valid and without a depth
-/// edge (a jump of `threshold` in inverse depth between 4-neighbours), is nearest the hole's
+/// edge (straddlesEdge), is nearest the hole's
 /// border level up to a constant: distance = mean over the level of (d - mean d)^2 with
 /// d = w(k) - w(k + t). Sorted by distance, then by shift (deterministic).
 std::vector<Candidate>
@@ -369,12 +496,7 @@ searchCandidates(const FillFrame& f, const Patch& p, int reach, float threshold)
       const Candidate c{static_cast<float>(std::max(0.0, sum2 / n - mean * mean)), static_cast<float>(mean), du, dv};
       if (best.size() == static_cast<std::size_t>(kCandidates) && !better(c, best.back()))
         continue;
-      for (const auto& pair : p.pairs)
-        if (std::abs(f.w[pair.first + shift] - f.w[pair.second + shift]) > threshold) {
-          usable = false;
-          break;
-        }
-      if (!usable)
+      if (straddlesEdge(f, p, shift, threshold))
         continue;
       best.insert(std::upper_bound(best.begin(), best.end(), c, better), c);
       if (best.size() > static_cast<std::size_t>(kCandidates))
@@ -413,34 +535,42 @@ combine(const FillFrame& f, const std::vector<Candidate>& candidates, int i, flo
   return static_cast<float>(sum / weight);
 }
 
-/// Fills one hole (or piece of one) into `out` (marking `filled`); leaves it a hole where its
-/// border does not allow a fill or no candidate was found.
+/// The pixels around a piece that its levels are split from: its border ring and the ends of its
+/// runs that lie within width + kBorderRing pixels of its box (a tile cut from a long hole sees
+/// the surfaces beside the tiles next to it; the far ends of a long shadow's column runs are left
+/// out, so that a patch stays as small as the hole is wide).
+std::vector<int>
+aroundOf(const Grid& g, const Hole& piece, const RunEnds& runs, std::vector<int> around)
+{
+  const int reach = piece.width + kBorderRing;
+  for (const auto& ends : runs.ends)
+    for (int i : ends) {
+      const int u = i % g.width, v = i / g.width;
+      if (i >= 0 && u >= piece.u0 - reach && u <= piece.u1 + reach && v >= piece.v0 - reach && v <= piece.v1 + reach)
+        around.push_back(i);
+    }
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
+  return around;
+}
+
+/// Fills `pixels` (of a piece as wide as `width`) from the candidates whose patches match
+/// `level`, into `out` (marking `filled`); leaves them holes where no candidate was found.
 void
-fillHole(const FillFrame& f, const Hole& hole, const std::vector<unsigned char>& active, Grid& out,
-         std::vector<unsigned char>& filled)
+fillFromLevel(const FillFrame& f, const std::vector<int>& pixels, const Level& level, int width, const RayModel& rays,
+              const std::vector<unsigned char>& active, Grid& out, std::vector<unsigned char>& filled)
 {
   const Grid& g = f.grid;
-  const std::vector<int> border = borderOf(g, hole);
-  RayModel rays;
-  if (!fitRays(f, border, rays))
-    return;
-  float threshold = 0.0f;
-  const std::vector<int> level = chooseLevel(f, border, rays, threshold);
-  if (level.empty())
-    return;
-  float sigma = 0.0f;
-  {
-    std::vector<float> sigmas;
-    for (int i : level)
-      sigmas.push_back(inverseDepthSigma(f, i));
-    std::nth_element(sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
-    sigma = sigmas[sigmas.size() / 2];
-  }
-  const Patch patch = makePatch(g, hole, level);
-  const std::vector<Candidate> candidates = searchCandidates(f, patch, kMinReach + 2 * hole.width, threshold);
+  std::vector<float> sigmas;
+  for (int i : level.pixels)
+    sigmas.push_back(inverseDepthSigma(f, i));
+  std::nth_element(sigmas.begin(), sigmas.begin() + sigmas.size() / 2, sigmas.end());
+  const float sigma = sigmas[sigmas.size() / 2];
+  const Patch patch = makePatch(f, pixels, level.pixels);
+  const std::vector<Candidate> candidates = searchCandidates(f, patch, kMinReach + 2 * width, level.threshold);
   if (candidates.empty())
     return;
-  for (int i : hole.pixels) {
+  for (int i : pixels) {
     if (!active.empty() && !active[i])
       continue;
     const float w = combine(f, candidates, i, sigma);
@@ -453,6 +583,32 @@ fillHole(const FillFrame& f, const Hole& hole, const std::vector<unsigned char>&
     out.z[i] = f.viewpoint[2] + depth;
     out.valid[i] = 1;
     filled[i] = 1;
+  }
+}
+
+/// Fills one hole (or piece of one) into `out` (marking `filled`): each pixel from the level
+/// assignLevels gives it, each level's pixels from their own candidates; pixels without a level
+/// or a candidate stay holes.
+void
+fillHole(const FillFrame& f, const Hole& hole, const std::vector<unsigned char>& active, Grid& out,
+         std::vector<unsigned char>& filled)
+{
+  const Grid& g = f.grid;
+  const std::vector<int> border = borderOf(g, hole);
+  RayModel rays;
+  if (!fitRays(f, border, rays))
+    return;
+  const RunEnds runs = runEndsOf(g, hole);
+  const std::vector<Level> levels = splitLevels(f, aroundOf(g, hole, runs, border), rays);
+  const std::vector<int> assigned = assignLevels(runs, levels);
+
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    std::vector<int> pixels;
+    for (std::size_t p = 0; p < hole.pixels.size(); ++p)
+      if (assigned[p] == static_cast<int>(k))
+        pixels.push_back(hole.pixels[p]);
+    if (!pixels.empty())
+      fillFromLevel(f, pixels, levels[k], hole.width, rays, active, out, filled);
   }
 }
 

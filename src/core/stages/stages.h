@@ -167,7 +167,8 @@ uncertaintyAlongMoves(FrameContext& ctx, Displacement displacement);
 /// FilterParameters::fill_holes: the holes of workspace.run.output (8-connected regions of
 /// invalid pixels, not touching the frame's border, active per `active`) at most fill_holes
 /// pixels wide get a range each from the non-local candidates whose patches match the hole's
-/// border on its farthest depth level, on the pixel's ray; sets workspace.run.filled. The edge
+/// border on the pixel's depth level (a surface that spans the hole along the pixel's row or
+/// column, else the occluded side of the edge), on the pixel's ray; sets workspace.run.filled. The edge
 /// and candidate scales come from the noise profile of `input`, the frame as given.
 /// (hole_filling.cpp)
 void

@@ -110,10 +110,11 @@ TEST(HoleFilling, AHoleInAPlaneEndsOnThePlaneOnItsPixelsRays)
     }
 }
 
-TEST(HoleFillingDepthStep, AHoleOnADepthStepTakesTheFarSideAndIsNeverBridged)
+TEST(HoleFillingDepthStep, AHoleAcrossAStraightStepTakesEachSideWhereTheStepGoesOn)
 {
   // Near plane at 1.0 m left of column 32, far plane at 1.6 m right of it; the hole straddles
-  // the step (a stereo shadow lies beside the near side's edge on the far side).
+  // the step. Above and below the hole each side goes on: its columns span the hole on their own
+  // side, so each pixel takes the side of its column, and nothing lies between.
   Grid frame = frameOf([](int u, int) { return u < 32 ? 1.0f : 1.6f; }, 0.001f);
   punch(frame, 29, 18, 35, 26);
   const FilterRun r = run(frame, filling(8));
@@ -124,9 +125,60 @@ TEST(HoleFillingDepthStep, AHoleOnADepthStepTakesTheFarSideAndIsNeverBridged)
       if (!r.filled[i])
         continue;
       ++filled;
-      EXPECT_NEAR(r.output.z[i], 1.6f, 0.005f) << u << ", " << v; // the far side, nothing between
+      EXPECT_NEAR(r.output.z[i], u < 32 ? 1.0f : 1.6f, 0.005f) << u << ", " << v;
     }
   EXPECT_EQ(filled, 48u);
+}
+
+TEST(HoleFillingDepthStep, AShadowTakesTheSurfaceBehindItRowByRow)
+{
+  // A foreground at 1.0 m right of column 32 casts a shadow 6 pixels wide on its left; behind
+  // the shadow a wall at 2.0 m above row 24 and a box at 1.5 m below it. Each row of the shadow
+  // lies on the surface left of it, never on the foreground: the shadow is on the occluded side.
+  Grid frame = frameOf([](int u, int v) { return u >= 32 ? 1.0f : (v < 24 ? 2.0f : 1.5f); }, 0.001f);
+  punch(frame, 26, 10, 32, 39);
+  const FilterRun r = run(frame, filling(8));
+  std::size_t filled = 0;
+  for (int v = 10; v < 39; ++v)
+    for (int u = 26; u < 32; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
+      if (!r.filled[i])
+        continue;
+      ++filled;
+      EXPECT_NEAR(r.output.z[i], v < 24 ? 2.0f : 1.5f, 0.01f) << u << ", " << v;
+    }
+  EXPECT_EQ(filled, 6u * 29u);
+}
+
+TEST(HoleFillingDepthStep, ADarkPatchReachingAForegroundsSilhouetteStaysOnTheForeground)
+{
+  // A foreground at 1.0 m left of column 32 before a background at 1.6 m; the hole lies on the
+  // foreground and reaches its silhouette. Its columns span it on the foreground.
+  Grid frame = frameOf([](int u, int) { return u < 32 ? 1.0f : 1.6f; }, 0.001f);
+  punch(frame, 27, 20, 32, 27);
+  const FilterRun r = run(frame, filling(8));
+  for (int v = 20; v < 27; ++v)
+    for (int u = 27; u < 32; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
+      ASSERT_TRUE(r.filled[i]) << u << ", " << v;
+      EXPECT_NEAR(r.output.z[i], 1.0f, 0.005f) << u << ", " << v;
+    }
+}
+
+TEST(HoleFilling, AHoleInAFloorSeenFromLowIsFilledOnTheFloor)
+{
+  // A floor 0.1 m below the camera (a wall at 3 m above the horizon): from row to row its inverse
+  // depth steps by more than a depth edge's threshold (4 pixel footprints), a slant and no edge.
+  const auto floor = [](int, int v) { return v < 26 ? 3.0f : 0.1f * kFocal / (v - kCy); };
+  Grid frame = frameOf(floor, 0.0005f);
+  punch(frame, 20, 30, 25, 34);
+  const FilterRun r = run(frame, filling(8));
+  for (int v = 30; v < 34; ++v)
+    for (int u = 20; u < 25; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
+      ASSERT_TRUE(r.filled[i]) << u << ", " << v;
+      EXPECT_NEAR(r.output.z[i], floor(u, v), 0.01f * floor(u, v)) << u << ", " << v;
+    }
 }
 
 TEST(HoleFillingDepthStep, AHoleBetweenTwoLevelsIsNeverGivenARangeBetweenThem)
