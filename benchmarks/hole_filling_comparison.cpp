@@ -2,6 +2,7 @@
 
 #include "bench_support.h"
 #include "librealsense_holes.h"
+#include "opencv_inpaint.h"
 
 #include <range_nlm/nonlocal_means_filter.h>
 
@@ -120,7 +121,7 @@ runMethods(const Cloud& noisy, const SceneOptions& scene, const Options& options
   const librealsense::HoleFillingMode modes[] = {librealsense::HoleFillingMode::fill_from_left,
                                                  librealsense::HoleFillingMode::farthest_from_around,
                                                  librealsense::HoleFillingMode::nearest_from_around};
-  for (const bool after_filter : {true, false})
+  for (const bool after_filter : {true, false}) {
     for (const auto mode : modes) {
       librealsense::HoleFillingParameters p;
       p.mode = mode;
@@ -131,6 +132,15 @@ runMethods(const Cloud& noisy, const SceneOptions& scene, const Options& options
                                librealsense::toString(mode) + "'",
                            std::move(out));
     }
+    for (const auto method : {opencv::InpaintMethod::telea, opencv::InpaintMethod::navier_stokes}) {
+      const auto start = std::chrono::steady_clock::now();
+      Cloud out = opencv::inpaintDepth(after_filter ? smooth : noisy, rays, method, options.inpaint_radius);
+      ms.push_back(elapsedMs(start) + (after_filter ? smooth_ms : 0.0));
+      outputs.emplace_back(std::string(after_filter ? "range_nlm default + " : "raw + ") + "OpenCV inpaint (" +
+                               opencv::toString(method) + ")",
+                           std::move(out));
+    }
+  }
   return outputs;
 }
 } // namespace

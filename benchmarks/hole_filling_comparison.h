@@ -1,8 +1,8 @@
 // Hole filling compared with what RealSense users run today (librealsense's hole-filling filter,
-// its three modes, reimplemented in librealsense_holes.h), on generated scenes with holes punched
-// where real depth cameras lose data, scored against ground truth (range_nlm_bench
-// --hole-filling). OpenCV's inpainting is not part of it: OpenCV is not a dependency of the
-// project (Debian's base has no libopencv), and PCL has no depth-image inpainting.
+// its three modes, reimplemented in librealsense_holes.h) and with OpenCV's inpainting (both of
+// its methods, opencv_inpaint.h), on generated scenes with holes punched where real depth cameras
+// lose data, scored against ground truth (range_nlm_bench --hole-filling). PCL has no depth-image
+// inpainting.
 #pragma once
 
 #include <range_nlm/eval/synthetic_scene.h>
@@ -29,6 +29,8 @@ struct Options
   int fill_holes = 24;
   /// Blobs punched per frame (dark or shiny patches), radius 1 .. 5 pixels.
   int blobs = 60;
+  /// cv::inpaint's inpaintRadius, pixels.
+  double inpaint_radius = 3.0;
   /// Baseline of the stereo shadows, metres (a RealSense D435's).
   double baseline = 0.05;
   int threads = 0;
@@ -80,7 +82,7 @@ struct SceneResult
 
 /// The methods on every scene and noise of `options`: range_nlm's default with fill_holes; the
 /// default without it followed by each librealsense mode (the D400's chain: hole filling after
-/// the spatial and temporal filters); each librealsense mode on the raw frame.
+/// the spatial and temporal filters) and each OpenCV inpainting method; the same on the raw frame.
 std::vector<SceneResult>
 run(const Options& options, std::ostream& log);
 

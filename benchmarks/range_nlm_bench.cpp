@@ -1502,7 +1502,7 @@ run(int argc, char** argv)
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
     ("uncertainty-calibration", "instead of timing: whether the per-point uncertainty is calibrated: generated scenes of every sensor noise model (seed --seed, size --quality-size) filtered by the default with the uncertainty on, alone and as the middle frame of three; per decile of the predicted standard deviation the actual RMS error over the predicted RMS, all, flat and feature points")
     ("uncertainty-plot", po::value<std::string>()->default_value(""), "--uncertainty-calibration: also write the reliability diagram (predicted against actual RMS per decile, log-log, one colour per model) to this PNG")
-    ("hole-filling", "instead of timing: range_nlm's hole filling against librealsense's hole-filling filter (its three modes, reimplemented; on the raw frame and after range_nlm) on generated scenes with shadows beside depth edges and blobs punched out, against ground truth (frame size: --quality-size)")
+    ("hole-filling", "instead of timing: range_nlm's hole filling against librealsense's hole-filling filter (its three modes, reimplemented) and OpenCV's inpainting (Telea, Navier-Stokes), on the raw frame and after range_nlm, on generated scenes with shadows beside depth edges and blobs punched out, against ground truth (frame size: --quality-size)")
     ("hole-filling-max", po::value<int>()->default_value(24), "--hole-filling: range_nlm's --fill-holes")
     ("quiet,q", "no progress lines on stderr");
   // clang-format on

@@ -5,6 +5,8 @@ cd "$(dirname "$0")/.."
 packages=(cmake g++ make libpcl-dev pcl-tools libeigen3-dev libflann-dev libboost-program-options-dev
           libgtest-dev libpng-dev nlohmann-json3-dev clang-14 libclang-rt-14-dev valgrind
           slurm-wlm munge
+          # OpenCV's inpainting (its photo module), a baseline of range_nlm_bench --hole-filling
+          libopencv-photo-dev
           # ROS 1 (Debian's own Noetic-era packages): the nodelet, range_nlm_node, --input-bag, and
           # for their tests the master (rosmaster) and a nodelet manager (libnodeletlib-tools).
           libroscpp-dev libsensor-msgs-dev libstd-msgs-dev libnodeletlib-dev libnodelet-dev pluginlib-dev
