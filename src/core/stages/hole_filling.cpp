@@ -143,6 +143,9 @@ struct FillFrame
   const Viewpoint& viewpoint;
   std::vector<float> w;
   NoiseProfile profile;
+  /// The output's per-point uncertainty (FilterParameters::uncertainty), metres; empty when off.
+  /// The fills read it at measured points and write it at filled ones.
+  std::vector<float>& uncertainty;
 };
 
 /// The hole's pixel rays (x - vx, y - vy) / (z - vz) as affine functions of the pixel
@@ -505,34 +508,59 @@ searchCandidates(const FillFrame& f, const Patch& p, int reach, float threshold)
   return best;
 }
 
+/// A filled pixel's inverse depth, and what its candidates say about it: the weighted variance
+/// of the values taken and the weighted mean of their own uncertainty (metres; 0 when off).
+struct Fill
+{
+  float w = 0.0f;
+  float variance = 0.0f;
+  float shared = 0.0f;
+};
+
 /// The inverse depth of hole pixel i from the candidates: their values carried to the hole's
 /// level, weighted by exp(-(distance - best distance) / (2 sigma^2)); the weighted mean of those
 /// within kKeepSigmas sigmas of their weighted median.
-float
+Fill
 combine(const FillFrame& f, const std::vector<Candidate>& candidates, int i, float sigma)
 {
-  std::vector<std::pair<float, float>> values; // (value, weight)
+  struct Value
+  {
+    float value, weight;
+    int at; // the candidate's pixel
+    bool operator<(const Value& o) const { return value < o.value || (value == o.value && at < o.at); }
+  };
+  std::vector<Value> values;
   const float h2 = 2.0f * sigma * sigma;
-  for (const Candidate& c : candidates)
-    values.emplace_back(f.w[i + c.dv * f.grid.width + c.du] + c.offset,
-                        std::exp(-(c.distance - candidates.front().distance) / h2));
+  for (const Candidate& c : candidates) {
+    const int at = i + c.dv * f.grid.width + c.du;
+    values.push_back({f.w[at] + c.offset, std::exp(-(c.distance - candidates.front().distance) / h2), at});
+  }
   std::sort(values.begin(), values.end());
   float total = 0.0f;
   for (const auto& v : values)
-    total += v.second;
-  float below = 0.0f, median = values.back().first;
+    total += v.weight;
+  float below = 0.0f, median = values.back().value;
   for (const auto& v : values) {
-    below += v.second;
+    below += v.weight;
     if (below >= 0.5f * total) {
-      median = v.first;
+      median = v.value;
       break;
     }
   }
-  double sum = 0.0, weight = 0.0;
+  double sum = 0.0, sum2 = 0.0, weight = 0.0, shared = 0.0;
+  const bool uncertain = !f.uncertainty.empty();
   for (const auto& v : values)
-    if (std::abs(v.first - median) <= kKeepSigmas * sigma)
-      sum += double(v.first) * v.second, weight += v.second;
-  return static_cast<float>(sum / weight);
+    if (std::abs(v.value - median) <= kKeepSigmas * sigma) {
+      sum += double(v.value) * v.weight, sum2 += double(v.value) * v.value * v.weight, weight += v.weight;
+      if (uncertain && std::isfinite(f.uncertainty[v.at]))
+        shared += double(f.uncertainty[v.at]) * v.weight;
+    }
+  Fill out;
+  const double mean = sum / weight;
+  out.w = static_cast<float>(mean);
+  out.variance = static_cast<float>(std::max(0.0, sum2 / weight - mean * mean));
+  out.shared = static_cast<float>(shared / weight);
+  return out;
 }
 
 /// The pixels around a piece that its levels are split from: its border ring and the ends of its
@@ -573,7 +601,8 @@ fillFromLevel(const FillFrame& f, const std::vector<int>& pixels, const Level& l
   for (int i : pixels) {
     if (!active.empty() && !active[i])
       continue;
-    const float w = combine(f, candidates, i, sigma);
+    const Fill fill = combine(f, candidates, i, sigma);
+    const float w = fill.w;
     if (!(w > 0.0f) || !std::isfinite(1.0f / w))
       continue;
     const float depth = 1.0f / w;
@@ -583,6 +612,12 @@ fillFromLevel(const FillFrame& f, const std::vector<int>& pixels, const Level& l
     out.z[i] = f.viewpoint[2] + depth;
     out.valid[i] = 1;
     filled[i] = 1;
+    if (!f.uncertainty.empty()) {
+      // Along the ray, metres: the candidates' disagreement (dz = dw / w^2) and the error they
+      // share, at most the mean of their own (as for a pass over filtered points).
+      const float spread = std::sqrt(fill.variance) * depth * depth;
+      f.uncertainty[i] = std::sqrt(spread * spread + fill.shared * fill.shared);
+    }
   }
 }
 
@@ -633,7 +668,7 @@ fillHoles(const Grid& input, const FilterParameters& parameters, const Viewpoint
   // The fills read the frame as it was before any hole was filled, so that their order (and the
   // thread count) does not matter: a copy, since they write into the output.
   const Grid before = out;
-  FillFrame frame{before, input, viewpoint, std::vector<float>(out.size(), 0.0f), {}};
+  FillFrame frame{before, input, viewpoint, std::vector<float>(out.size(), 0.0f), {}, workspace.run.uncertainty};
   for (std::size_t i = 0; i < before.size(); ++i)
     if (before.valid[i] && before.z[i] - viewpoint[2] > 0.0f)
       frame.w[i] = 1.0f / (before.z[i] - viewpoint[2]);

@@ -1,13 +1,15 @@
 // The hole filling (src/core/stages/hole_filling.cpp): holes in a plane end on the plane, a hole
 // on a depth step takes one side and is never bridged, the width limit and the frame border,
-// nothing changes when it is off, the same result for any thread count.
+// nothing changes when it is off, the same result for any thread count, filled points' uncertainty.
 #include "../frame_fixtures.h"
 
 #include <range_nlm/parameters.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -247,6 +249,7 @@ TEST(HoleFilling, TheSameForOneTwoAndThreeThreads)
   punch(frame, 45, 25, 47, 44);
   FilterParameters p = filling(6);
   p.threads = 1;
+  p.uncertainty = true;
   const FilterRun one = run(frame, p);
   EXPECT_GT(countFilled(one), 0u);
   for (int threads : {2, 3}) {
@@ -254,5 +257,40 @@ TEST(HoleFilling, TheSameForOneTwoAndThreeThreads)
     const FilterRun other = run(frame, p);
     EXPECT_TRUE(sameBits(one.output, other.output)) << threads;
     EXPECT_EQ(one.filled, other.filled) << threads;
+    ASSERT_EQ(one.uncertainty.size(), other.uncertainty.size());
+    EXPECT_EQ(std::memcmp(one.uncertainty.data(), other.uncertainty.data(), one.uncertainty.size() * sizeof(float)), 0)
+        << threads;
   }
+}
+
+TEST(HoleFilling, FilledPointsCarryTheUncertaintyOfTheirCandidates)
+{
+  Grid frame = frameOf(tiltedPlane, 0.001f);
+  punch(frame, 28, 20, 34, 26);
+  FilterParameters p = filling(8);
+  p.uncertainty = true;
+  const FilterRun r = run(frame, p);
+  ASSERT_EQ(r.uncertainty.size(), frame.size());
+  float lowest = std::numeric_limits<float>::infinity(), highest = 0.0f;
+  for (std::size_t i = 0; i < frame.size(); ++i)
+    if (frame.valid[i] && std::isfinite(r.uncertainty[i]))
+      lowest = std::min(lowest, r.uncertainty[i]), highest = std::max(highest, r.uncertainty[i]);
+  std::size_t filled = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (!r.filled[i])
+      continue;
+    ++filled;
+    const float u = r.uncertainty[i];
+    ASSERT_TRUE(std::isfinite(u)) << i;
+    // At least what the candidates share (the least of the measured points' own), and on a plane
+    // the candidates agree: not far above the most uncertain measured point.
+    EXPECT_GE(u, lowest) << i;
+    EXPECT_LE(u, 2.0f * highest) << i;
+    // And it covers the fill's error (along the ray, the depth's).
+    const int column = static_cast<int>(i % kWidth), row = static_cast<int>(i / kWidth);
+    EXPECT_LE(std::abs(r.output.z[i] - tiltedPlane(column, row)), 3.0f * u) << i;
+  }
+  EXPECT_EQ(filled, 36u);
+  // Without the uncertainty nothing is written for it.
+  EXPECT_TRUE(run(frame, filling(8)).uncertainty.empty());
 }
