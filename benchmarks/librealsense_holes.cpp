@@ -161,25 +161,29 @@ HoleFillingFilter::filter(const pcl::PointCloud<pcl::PointXYZ>& in, const Pinhol
   process(depth.data(), int(in.width), int(in.height));
 
   pcl::PointCloud<pcl::PointXYZ> out = in;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   bool dense = true;
   for (std::size_t i = 0; i < out.size(); ++i) {
     pcl::PointXYZ& q = out[i];
     if (before[i])
       continue; // measured: kept as it was (the filter never changes a non-zero depth)
-    if (!depth[i]) {
-      q.x = q.y = q.z = nan;
-      dense = false;
-      continue;
-    }
-    const double z = double(depth[i]) * unit;
     const int u = static_cast<int>(i % in.width), v = static_cast<int>(i / in.width);
-    q.x = static_cast<float>((u - rays.cx) / rays.fx * z);
-    q.y = static_cast<float>((v - rays.cy) / rays.fy * z);
-    q.z = static_cast<float>(z);
+    dense &= rays.place(q, u, v, double(depth[i]) * unit);
   }
   out.is_dense = dense;
   return out;
+}
+
+bool
+PinholeRays::place(pcl::PointXYZ& q, int u, int v, double z) const
+{
+  if (!(z > 0.0)) {
+    q.x = q.y = q.z = std::numeric_limits<float>::quiet_NaN();
+    return false;
+  }
+  q.x = static_cast<float>((u - cx) / fx * z);
+  q.y = static_cast<float>((v - cy) / fy * z);
+  q.z = static_cast<float>(z);
+  return true;
 }
 
 } // namespace librealsense

@@ -60,6 +60,9 @@ toString(HoleFillingMode mode);
 struct PinholeRays
 {
   double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  /// Puts q on the ray of pixel (u, v) at depth z; a depth of 0 or less (a pixel left a hole)
+  /// makes it NaN in x, y and z. Whether it was placed.
+  bool place(pcl::PointXYZ& q, int u, int v, double z) const;
 };
 
 /// The filter's options, with librealsense's names and defaults.

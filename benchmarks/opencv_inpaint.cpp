@@ -56,22 +56,13 @@ inpaintDepth(const pcl::PointCloud<pcl::PointXYZ>& in, const librealsense::Pinho
   cv::inpaint(depth, mask, filled, radius, method == InpaintMethod::telea ? cv::INPAINT_TELEA : cv::INPAINT_NS);
 
   pcl::PointCloud<pcl::PointXYZ> out = in;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   bool dense = true;
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u) {
       pcl::PointXYZ& q = out[std::size_t(v) * w + u];
       if (!mask.at<unsigned char>(v, u))
         continue; // measured: kept as it was
-      const double z = filled.at<std::uint16_t>(v, u) * kMillimetre;
-      if (!(z > 0.0)) {
-        q.x = q.y = q.z = nan;
-        dense = false;
-        continue;
-      }
-      q.x = static_cast<float>((u - rays.cx) / rays.fx * z);
-      q.y = static_cast<float>((v - rays.cy) / rays.fy * z);
-      q.z = static_cast<float>(z);
+      dense &= rays.place(q, u, v, filled.at<std::uint16_t>(v, u) * kMillimetre);
     }
   out.is_dense = dense;
   return out;
