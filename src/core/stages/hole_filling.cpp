@@ -44,6 +44,8 @@ constexpr int kCandidates = 16;
 /// left out of its mean: a minority of candidates that see another surface where the hole is
 /// cannot pull the fill between levels.
 constexpr float kKeepSigmas = 3.0f;
+/// Relative margin of the candidate search's early stop over the rounding of the distances.
+constexpr double kScatterMargin = 1e-4;
 /// The search window's half side: this many pixels around the hole, plus twice its width.
 constexpr int kMinReach = 6;
 
@@ -486,12 +488,21 @@ searchCandidates(const FillFrame& f, const Patch& p, int reach, float threshold)
       bool usable = true;
       for (std::size_t k = 0; k < p.unknown.size() && usable; ++k)
         usable = f.w[p.unknown[k] + shift] > 0.0f;
+      // Once kCandidates are kept, a shift stops as soon as the scatter of the differences so far
+      // (a lower bound of n times the distance: sum (d - mean)^2 over all pixels is at least that
+      // over the first k about their own mean) shows it cannot be kept; the margin keeps every
+      // shift the whole sum would keep, whatever the rounding.
+      const double bound = best.size() == static_cast<std::size_t>(kCandidates)
+                               ? n * double(best.back().distance) * (1.0 + kScatterMargin) + 1e-12
+                               : std::numeric_limits<double>::infinity();
       double sum = 0.0, sum2 = 0.0;
       for (std::size_t k = 0; k < p.known.size() && usable; ++k) {
         const float c = f.w[p.known[k] + shift];
         usable = c > 0.0f;
         const double d = double(f.w[p.known[k]]) - c;
         sum += d, sum2 += d * d;
+        if ((k & 15) == 15 && sum2 - sum * sum / double(k + 1) > bound)
+          usable = false;
       }
       if (!usable)
         continue;
