@@ -584,8 +584,10 @@ aroundOf(const Grid& g, const Hole& piece, const RunEnds& runs, std::vector<int>
   const int reach = piece.width + kBorderRing;
   for (const auto& ends : runs.ends)
     for (int i : ends) {
+      if (i < 0)
+        continue; // the frame's edge
       const int u = i % g.width, v = i / g.width;
-      if (i >= 0 && u >= piece.u0 - reach && u <= piece.u1 + reach && v >= piece.v0 - reach && v <= piece.v1 + reach)
+      if (u >= piece.u0 - reach && u <= piece.u1 + reach && v >= piece.v0 - reach && v <= piece.v1 + reach)
         around.push_back(i);
     }
   std::sort(around.begin(), around.end());
@@ -647,7 +649,6 @@ fillHole(const FillFrame& f, const Hole& hole, const std::vector<unsigned char>&
   const RunEnds runs = runEndsOf(g, hole);
   const std::vector<Level> levels = splitLevels(f, aroundOf(g, hole, runs, border), rays);
   const std::vector<int> assigned = assignLevels(runs, levels);
-
   for (std::size_t k = 0; k < levels.size(); ++k) {
     std::vector<int> pixels;
     for (std::size_t p = 0; p < hole.pixels.size(); ++p)
