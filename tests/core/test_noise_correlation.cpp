@@ -218,18 +218,32 @@ TEST(Dilation, AutomaticFallsBackToContiguousWindowsWhereAPhaseIsNarrowerThanThe
   EXPECT_THROW(runFilter({&g}, 0, forced, kOrigin, {}), std::invalid_argument);
 }
 
+namespace
+{
+/// `count` frames of the boxes scene with stereo noise and 5 % dropouts at 320 x 240: correlated
+/// noise, holes and borders, which take the automatic dilated passes.
+std::vector<Grid>
+stereoBoxesWithHoles(int count)
+{
+  SceneOptions o = planeScene("stereo", 320, 240);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  o.frames = count;
+  std::vector<Grid> frames;
+  for (const auto& frame : renderSequence(o))
+    frames.push_back(gridOf(frame.noisy));
+  return frames;
+}
+} // namespace
+
 // The default configuration on a frame with correlated noise, holes and borders, which takes the
 // automatic dilated passes: the same bits with 1, 2 and 3 threads, and again when the workspace
 // (pre-smoothed copy, gates, maps, the phases' frames and workspace) is reused for a second frame
 // and then the first again.
 TEST(Dilation, DefaultRunIsTheSameForAnyThreadCountAndAReusedWorkspace)
 {
-  SceneOptions o = planeScene("stereo", 320, 240);
-  o.scene = SceneType::boxes;
-  o.dropout = 0.05;
-  o.frames = 2;
-  const auto sequence = renderSequence(o);
-  const Grid first = gridOf(sequence[0].noisy), second = gridOf(sequence[1].noisy);
+  const std::vector<Grid> sequence = stereoBoxesWithHoles(2);
+  const Grid &first = sequence[0], &second = sequence[1];
   ASSERT_EQ(automaticDilation(first), 2);
   FilterParameters p = FilterParameters::recommended();
   p.threads = 1;
@@ -269,14 +283,7 @@ private:
 // middle frame of three, on a frame with holes and borders.
 TEST(Dilation, PhasesSideBySideGiveTheBitsOfThePhasesInTurn)
 {
-  SceneOptions o = planeScene("stereo", 320, 240);
-  o.scene = SceneType::boxes;
-  o.dropout = 0.05;
-  o.frames = 3;
-  const auto sequence = renderSequence(o);
-  std::vector<Grid> frames;
-  for (const auto& frame : sequence)
-    frames.push_back(gridOf(frame.noisy));
+  const std::vector<Grid> frames = stereoBoxesWithHoles(3);
   ASSERT_EQ(automaticDilation(frames[1]), 2);
   std::vector<unsigned char> active(frames[1].size(), 0);
   for (std::size_t i = 0; i < active.size(); i += 3)

@@ -92,6 +92,20 @@ countFilled(const FilterRun& r)
     n += f;
   return n;
 }
+
+/// Expects every pixel of [u0, u1) x [v0, v1) filled, at depth(u, v) within absolute + relative
+/// times that depth.
+void
+expectFilledAt(const FilterRun& r, int u0, int v0, int u1, int v1, const std::function<float(int, int)>& depth,
+               float absolute, float relative = 0.0f)
+{
+  for (int v = v0; v < v1; ++v)
+    for (int u = u0; u < u1; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
+      ASSERT_TRUE(r.filled[i]) << u << ", " << v;
+      EXPECT_NEAR(r.output.z[i], depth(u, v), absolute + relative * depth(u, v)) << u << ", " << v;
+    }
+}
 } // namespace
 
 TEST(HoleFilling, AHoleInAPlaneEndsOnThePlaneOnItsPixelsRays)
@@ -119,17 +133,7 @@ TEST(HoleFillingDepthStep, AHoleAcrossAStraightStepTakesEachSideWhereTheStepGoes
   // side, so each pixel takes the side of its column, and nothing lies between.
   Grid frame = frameOf([](int u, int) { return u < 32 ? 1.0f : 1.6f; }, 0.001f);
   punch(frame, 29, 18, 35, 26);
-  const FilterRun r = run(frame, filling(8));
-  std::size_t filled = 0;
-  for (int v = 18; v < 26; ++v)
-    for (int u = 29; u < 35; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
-      if (!r.filled[i])
-        continue;
-      ++filled;
-      EXPECT_NEAR(r.output.z[i], u < 32 ? 1.0f : 1.6f, 0.005f) << u << ", " << v;
-    }
-  EXPECT_EQ(filled, 48u);
+  expectFilledAt(run(frame, filling(8)), 29, 18, 35, 26, [](int u, int) { return u < 32 ? 1.0f : 1.6f; }, 0.005f);
 }
 
 TEST(HoleFillingDepthStep, AShadowTakesTheSurfaceBehindItRowByRow)
@@ -139,17 +143,7 @@ TEST(HoleFillingDepthStep, AShadowTakesTheSurfaceBehindItRowByRow)
   // lies on the surface left of it, never on the foreground: the shadow is on the occluded side.
   Grid frame = frameOf([](int u, int v) { return u >= 32 ? 1.0f : (v < 24 ? 2.0f : 1.5f); }, 0.001f);
   punch(frame, 26, 10, 32, 39);
-  const FilterRun r = run(frame, filling(8));
-  std::size_t filled = 0;
-  for (int v = 10; v < 39; ++v)
-    for (int u = 26; u < 32; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
-      if (!r.filled[i])
-        continue;
-      ++filled;
-      EXPECT_NEAR(r.output.z[i], v < 24 ? 2.0f : 1.5f, 0.01f) << u << ", " << v;
-    }
-  EXPECT_EQ(filled, 6u * 29u);
+  expectFilledAt(run(frame, filling(8)), 26, 10, 32, 39, [](int, int v) { return v < 24 ? 2.0f : 1.5f; }, 0.01f);
 }
 
 TEST(HoleFillingDepthStep, ADarkPatchReachingAForegroundsSilhouetteStaysOnTheForeground)
@@ -158,13 +152,7 @@ TEST(HoleFillingDepthStep, ADarkPatchReachingAForegroundsSilhouetteStaysOnTheFor
   // foreground and reaches its silhouette. Its columns span it on the foreground.
   Grid frame = frameOf([](int u, int) { return u < 32 ? 1.0f : 1.6f; }, 0.001f);
   punch(frame, 27, 20, 32, 27);
-  const FilterRun r = run(frame, filling(8));
-  for (int v = 20; v < 27; ++v)
-    for (int u = 27; u < 32; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
-      ASSERT_TRUE(r.filled[i]) << u << ", " << v;
-      EXPECT_NEAR(r.output.z[i], 1.0f, 0.005f) << u << ", " << v;
-    }
+  expectFilledAt(run(frame, filling(8)), 27, 20, 32, 27, [](int, int) { return 1.0f; }, 0.005f);
 }
 
 TEST(HoleFilling, AHoleInAFloorSeenFromLowIsFilledOnTheFloor)
@@ -174,13 +162,7 @@ TEST(HoleFilling, AHoleInAFloorSeenFromLowIsFilledOnTheFloor)
   const auto floor = [](int, int v) { return v < 26 ? 3.0f : 0.1f * kFocal / (v - kCy); };
   Grid frame = frameOf(floor, 0.0005f);
   punch(frame, 20, 30, 25, 34);
-  const FilterRun r = run(frame, filling(8));
-  for (int v = 30; v < 34; ++v)
-    for (int u = 20; u < 25; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * kWidth + u;
-      ASSERT_TRUE(r.filled[i]) << u << ", " << v;
-      EXPECT_NEAR(r.output.z[i], floor(u, v), 0.01f * floor(u, v)) << u << ", " << v;
-    }
+  expectFilledAt(run(frame, filling(8)), 20, 30, 25, 34, floor, 0.0f, 0.01f);
 }
 
 TEST(HoleFillingDepthStep, AHoleBetweenTwoLevelsIsNeverGivenARangeBetweenThem)
