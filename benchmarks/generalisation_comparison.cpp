@@ -182,7 +182,10 @@ settingFromText(const std::string& spec)
     const std::size_t end = std::min(spec.find(',', begin), spec.size());
     const std::string item = spec.substr(begin, end - begin);
     try {
-      bench::setRegistryField(item, setting.parameters);
+      if (item.rfind("preset=", 0) == 0) // a preset's parameters, then the fields after it
+        setting.parameters = FilterParameters::preset(item.substr(7));
+      else
+        bench::setRegistryField(item, setting.parameters);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + item + "' of setting '" + spec + "': " + e.what());
     }

@@ -24,9 +24,10 @@ struct Setting
   FilterParameters parameters;
 };
 
-/// The setting "NAME=VALUE[,NAME=VALUE...]": the recommended parameters with each named field of
-/// the parameter registry set, named by `spec` itself. Throws std::invalid_argument naming the
-/// item and what is wrong with it (unknown field, bad value, out of range).
+/// The setting "NAME=VALUE[,NAME=VALUE...]": the recommended parameters (or those of a preset,
+/// with an item preset=NAME) with each named field of the parameter registry set, named by `spec`
+/// itself. Throws std::invalid_argument naming the item and what is wrong with it (unknown field,
+/// bad value, out of range).
 Setting
 settingFromText(const std::string& spec);
 

@@ -1225,6 +1225,17 @@ runComparison(const po::variables_map& vm)
       r.include_mls = false;
     }
     r.render_dir = vm["real-noise-renders"].as<std::string>();
+    if (vm.count("real-noise-setting")) {
+      r.settings.emplace_back("default", FilterParameters::recommended());
+      for (const std::string& spec : vm["real-noise-setting"].as<std::vector<std::string>>()) {
+        try {
+          const generalisation::Setting setting = generalisation::settingFromText(spec);
+          r.settings.emplace_back(setting.name, setting.parameters);
+        } catch (const std::invalid_argument& e) {
+          throw UsageError(std::string("--real-noise-setting ") + e.what());
+        }
+      }
+    }
     real_noise::addShippedFrames(r, RANGE_NLM_DATA_DIR, vm["real-noise-data"].as<std::string>());
     real_noise::run(r, log, report, &json_text);
     if (json)
@@ -1497,6 +1508,8 @@ run(int argc, char** argv)
     ("real-noise", "instead of timing: range_nlm's settings against grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares under realistic sensor noise: generated scenes with the stereo, kinect1, tof and kinect noise models (ground truth), the real frames in data/ (residual of their planar regions, interior and border band) and static real sequences (jitter)")
     ("real-noise-data", po::value<std::string>()->default_value(""), "--real-noise, --temporal-comparison: another folder laid out like data/ whose real frames are also used (e.g. one holding depth-images/realsense-d435-static/pose4 and pose5 for the jitter)")
     ("real-noise-renders", po::value<std::string>()->default_value(""), "--real-noise: write a flat-shaded image raw | range_nlm default | FastBilateral (sigma_s 5, sigma_r 0.03) of each real frame into this folder")
+    ("real-noise-setting", po::value<std::vector<std::string>>(),
+     "--real-noise: compare the default and this setting (NAME=VALUE[,NAME=VALUE...] on top of the default, or preset=NAME[,...]) instead of the usual settings; repeatable")
     ("real-noise-quick", "--real-noise: one noise level and seed per model, without MovingLeastSquares")
     ("temporal-comparison", "instead of timing: a generated sequence with a moving box filtered by range_nlm (per frame, temporal: centred, causal, recursive), by a per-pixel running average / median and by librealsense's temporal filter (reimplemented); temporal jitter and error at the moving edges; and the jitter of the static RealSense D435 triples if found (see --real-noise-data)")
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")

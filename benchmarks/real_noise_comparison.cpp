@@ -38,10 +38,11 @@ using peer_grids::ScoredRow;
 using peer_grids::Smoother;
 
 std::vector<Smoother>
-rangeNlmSmoothers(int threads)
+rangeNlmSmoothers(const Options& options)
 {
   std::vector<Smoother> s;
-  for (auto [name, p] : variants()) {
+  const int threads = options.threads;
+  for (auto [name, p] : options.settings.empty() ? variants() : options.settings) {
     p.threads = threads;
     s.push_back(peer_grids::rangeNlm(name, p));
   }
@@ -179,7 +180,7 @@ void
 run(const Options& options, std::ostream& log, std::ostream& report, std::ostream* json)
 {
   nlohmann::json out = nlohmann::json::object();
-  const std::vector<Smoother> ours = rangeNlmSmoothers(options.threads);
+  const std::vector<Smoother> ours = rangeNlmSmoothers(options);
   const std::vector<Smoother> fb = peer_grids::fastBilateralGrid();
   const std::vector<Smoother> mls = options.include_mls ? peer_grids::mlsGrid(options.threads) : std::vector<Smoother>{};
 

@@ -38,6 +38,9 @@ struct Options
   /// Include pcl::MovingLeastSquares (slow) in the generated scenes.
   bool include_mls = true;
   int threads = 0;
+  /// If not empty: these settings (name, parameters) are compared instead of variants() (the
+  /// default stays first, as the reference of the tally).
+  std::vector<std::pair<std::string, FilterParameters>> settings;
 };
 
 /// The frames the comparison uses by default: the real frames under `data_dir` (the project's

@@ -265,6 +265,16 @@ run(const Options& options, std::ostream& log)
     const auto results = timed([&] { return rangeNlmSequence(noisy, window, parameters); }, ms);
     evaluate(std::string("range_nlm temporal, radius 1") + windowName(window), results, ms);
   }
+  // The live preset, as a camera's stream runs it: per frame, and in the recursive window.
+  FilterParameters live = FilterParameters::live();
+  live.threads = options.threads;
+  {
+    double ms = 0;
+    const auto results = timed([&] { return perFrame(noisy, live); }, ms);
+    evaluate("range_nlm live per frame (static)", results, ms);
+    const auto recursive = timed([&] { return rangeNlmSequence(noisy, TemporalWindow::recursive, live); }, ms);
+    evaluate("range_nlm live temporal, radius 1, recursive", recursive, ms);
+  }
   for (const auto& p : librealsenseSettings()) {
     double ms = 0;
     const auto results = timed([&] { return librealsenseSequence(noisy, p); }, ms);
@@ -356,6 +366,11 @@ runStatic(const Options& options, std::ostream& log)
     for (TemporalWindow window : {TemporalWindow::centred, TemporalWindow::recursive})
       add_with_png(std::string("range_nlm temporal, radius 1") + windowName(window) + ", cross-frame temporal",
                    rangeNlmSequence(raw, window, static_camera));
+    FilterParameters live = FilterParameters::live();
+    live.threads = options.threads;
+    add_with_png("range_nlm live per frame", perFrame(raw, live));
+    add_with_png("range_nlm live temporal, radius 1, recursive",
+                 rangeNlmSequence(raw, TemporalWindow::recursive, live));
     for (const auto& p : librealsenseSettings())
       add(librealsenseName(p), librealsenseSequence(raw, p));
     results.push_back(std::move(result));

@@ -126,7 +126,7 @@ choiceValue(const ParameterEntry& entry, const std::string& text);
 void
 setChoice(const ParameterEntry& entry, FilterParameters& p, int value);
 
-/// The Markdown table of every field (field, default, paper, unit, valid values, meaning), as
+/// The Markdown table of every field (field, default, live, paper, unit, valid values, meaning), as
 /// docs/method.md shows it.
 std::string
 parameterTable();

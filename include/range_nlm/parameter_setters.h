@@ -115,6 +115,10 @@ public:
   /// true; paper preset false). See FilterParameters::patch_guide.
   void setPatchGuide(bool on) { parameters_.patch_guide = on; }
   bool getPatchGuide() const { return parameters_.patch_guide; }
+  /// Carry the noise profile and the automatic dilation from frame to frame (default false; live
+  /// preset true). See FilterParameters::reuse_estimates.
+  void setReuseEstimates(bool on) { parameters_.reuse_estimates = on; }
+  bool getReuseEstimates() const { return parameters_.reuse_estimates; }
   /// Also estimate each output point's uncertainty (default false). See
   /// FilterParameters::uncertainty.
   void setEstimateUncertainty(bool on) { parameters_.uncertainty = on; }

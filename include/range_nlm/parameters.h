@@ -210,6 +210,16 @@ struct FilterParameters
   /// default 0.
   int fill_holes = 0;
 
+  /// Carry what describes the sensor -- the current frame's noise profile and the automatic
+  /// dilation -- from one call to the next on the same filter object or stream, instead of
+  /// estimating them on every frame: they are estimated afresh when a sparse check of the frame
+  /// (its noise at lags 1, R / 2 and R, its range distribution) disagrees with the frame they were
+  /// made on beyond the check's sampling error, when the size, viewpoint or a parameter they depend
+  /// on changed, and at least every tuned::kReuseMaxFrames frames (docs/method.md, "Estimates
+  /// carried in a stream"). An output then depends on the frames before it. Default false (live:
+  /// true).
+  bool reuse_estimates = false;
+
   /// Throws std::invalid_argument naming the first invalid parameter (in the order of the fields)
   /// and its value.
   void validate() const;
@@ -221,7 +231,12 @@ struct FilterParameters
   static FilterParameters paper();
   /// The project's recommended setting (the defaults above; the default of the tools).
   static FilterParameters recommended();
-  /// Parameters of a named preset ("paper" or "default"); throws std::invalid_argument otherwise.
+  /// The setting for live cameras, designed for a frame budget (docs/method.md, "The live
+  /// preset"): less accurate than recommended(), about the time of PCL's FastBilateralFilterOMP
+  /// per VGA frame. The default of the ROS node.
+  static FilterParameters live();
+  /// Parameters of a named preset ("default", "live" or "paper"); throws std::invalid_argument
+  /// otherwise.
   static FilterParameters preset(const std::string& name);
 };
 

@@ -104,7 +104,8 @@ def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **par
 
     points: H x W x 3 float32 or float64 array, C-contiguous; NaN (in any coordinate) marks an
         invalid point, which stays NaN in x, y and z. An infinite coordinate is refused.
-    parameters: a Parameters object, 'default' or 'paper', or None (the recommended setting);
+    parameters: a Parameters object, a preset name ('default', 'live' for a live camera's frame
+        rate, or 'paper'), or None (the recommended setting, 'default');
         the keyword arguments override it (see Parameters.registry() for every one).
     viewpoint: the sensor position (x, y, z), default the origin (as a PCD without VIEWPOINT).
     return_info: also return a dict with the bandwidths the filter chose
@@ -145,6 +146,7 @@ class Stream:
     radius: temporal radius r (0: every frame alone).
     mode: 'centred' (frames t - r .. t + r; output lags input by r frames), 'causal'
         (t - r .. t, no delay; --causal) or 'recursive' (a running-average history; --recursive).
+        None (the default): 'recursive' with the 'live' preset (a camera's stream), else 'centred'.
     intrinsics, depth_scale, output: for depth-image frames, as denoise_depth(); frames are then
         H x W images, otherwise H x W x 3 points.
     Keyword arguments: the filter's parameters, as denoise().
@@ -155,13 +157,15 @@ class Stream:
     frames returned (see denoise's return_info).
     """
 
-    def __init__(self, radius=1, mode="centred", parameters=None, *, intrinsics=None, depth_scale=None,
+    def __init__(self, radius=1, mode=None, parameters=None, *, intrinsics=None, depth_scale=None,
                  output="depth", **params):
         if isinstance(radius, bool) or not hasattr(radius, "__index__"):
             raise TypeError("range_nlm: radius must be an integer, got %r" % (radius,))
         radius = operator.index(radius)
         if radius < 0:
             raise ValueError("range_nlm: radius must be >= 0, got %d" % radius)
+        if mode is None:
+            mode = "recursive" if isinstance(parameters, str) and parameters == "live" else "centred"
         self.radius = radius
         self.mode = mode
         self._stream = _range_nlm._Stream(radius, mode, None if intrinsics is None else _intrinsics(intrinsics),

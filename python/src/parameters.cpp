@@ -239,7 +239,7 @@ parametersOf(const py::handle& parameters)
   if (py::isinstance<py::str>(parameters))
     return FilterParameters::preset(parameters.cast<std::string>());
   if (!py::isinstance<FilterParameters>(parameters))
-    throw py::type_error("range_nlm: parameters must be a range_nlm.Parameters, a preset name ('default' or "
+    throw py::type_error("range_nlm: parameters must be a range_nlm.Parameters, a preset name ('default', 'live' or "
                          "'paper') or None, got " +
                          py::str(parameters.get_type().attr("__name__")).cast<std::string>());
   return parameters.cast<FilterParameters>();
@@ -259,7 +259,8 @@ bindParameters(py::module_& m)
           }))
       .def_static("recommended", &FilterParameters::recommended, "The project's recommended setting (the default).")
       .def_static("paper", &FilterParameters::paper, "The literal method of the paper.")
-      .def_static("preset", &FilterParameters::preset, py::arg("name"), "'default' or 'paper'.")
+      .def_static("live", &FilterParameters::live, "The setting for a live camera's frame rate.")
+      .def_static("preset", &FilterParameters::preset, py::arg("name"), "'default', 'live' or 'paper'.")
       .def(
           "replace",
           [](const FilterParameters& p, const py::kwargs& kw) {

@@ -173,6 +173,8 @@ refuseUnknownParameters(const ros::NodeHandle& node)
 
 } // namespace
 
+const char* const kDefaultPreset = "live";
+
 const char*
 windowName(range_nlm::TemporalWindow window)
 {
@@ -189,7 +191,7 @@ windowName(range_nlm::TemporalWindow window)
 range_nlm::FilterParameters
 filterParametersFromParameters(const ros::NodeHandle& node)
 {
-  std::string preset = "default";
+  std::string preset = kDefaultPreset;
   readParameter(node, "preset", preset, "a string");
   range_nlm::FilterParameters p;
   try {
@@ -215,8 +217,15 @@ streamSettingsFromParameters(const ros::NodeHandle& node)
 {
   StreamSettings settings;
   settings.parameters = filterParametersFromParameters(node);
+  // A camera's stream on the live preset: one frame of history in the recursive window (a
+  // running average of what stayed static), no output delay; other presets filter each frame
+  // alone unless told otherwise.
+  std::string preset = kDefaultPreset;
+  readParameter(node, "preset", preset, "a string");
+  const bool live = preset == "live";
+  settings.temporal_radius = live ? 1 : 0;
   readParameter(node, "temporal_radius", settings.temporal_radius, "an integer");
-  bool causal = true, recursive = false;
+  bool causal = true, recursive = live;
   readParameter(node, "causal", causal, "a boolean");
   readParameter(node, "recursive", recursive, "a boolean");
   settings.window = windowOf(causal, recursive);

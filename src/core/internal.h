@@ -144,6 +144,11 @@ estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Gr
 /// estimateNoiseCorrelation by `threads` threads, with the same result.
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step, int threads);
+/// The automatic dilation's reference lag R for a frame `width` pixels wide:
+/// tuned::kDilationReferenceLag per tuned::kDilationReferenceWidth columns, rounded, in
+/// [kDilationMinLag, kDilationMaxLag].
+int
+dilationReferenceLag(int width);
 /// automaticDilation by `threads` threads, with the same result.
 int
 automaticDilation(const Grid& frame, int threads);
@@ -179,6 +184,44 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
                        const std::vector<unsigned char>& active, std::vector<float>& offsets,
                        const std::vector<float>& patch_gate = {}, std::vector<float>* planes = nullptr,
                        OffsetSpread* spread = nullptr);
+
+/// A robust noise scale of a frame and the standard error of its logarithm, as measured from the
+/// spread of the scale over groups of its samples (carried_estimates.cpp).
+struct Scale
+{
+  float scale = 0.0f;     // 0: too few samples
+  float log_error = 0.0f; // standard error of ln(scale)
+  std::size_t samples = 0;
+};
+
+/// What a sparse look at a frame says of its sensor and ranges (FilterParameters::reuse_estimates):
+/// on a lattice of about tuned::kReuseCheckColumns columns, the robust scales of the second
+/// differences of inverse depth (times z^2) at lags 1, R / 2 and R (R = dilationReferenceLag, as
+/// the automatic dilation looks at them), each with its measured error, and the range quantiles
+/// kReuseRangeTail and 1 - kReuseRangeTail of the lattice's valid points.
+struct EstimateSignature
+{
+  int width = 0, height = 0;
+  Viewpoint viewpoint{};
+  Scale near, half, far;
+  float range_low = 0.0f, range_high = 0.0f;
+  std::size_t range_samples = 0;
+};
+
+/// The estimates a stream carries from frame to frame, with the signature of the frame they were
+/// made on and the parameters they depend on.
+struct CarriedEstimates
+{
+  bool valid = false;
+  EstimateSignature signature;
+  FilterParameters parameters;
+  /// The current frame's noise profile (empty: none was estimated) and the automatic dilation
+  /// (0: none was chosen).
+  NoiseProfile profile;
+  int dilation = 0;
+  /// Frames filtered with these estimates, the one they were made on included.
+  int frames = 0;
+};
 
 } // namespace detail
 } // namespace range_nlm

@@ -22,6 +22,14 @@ estimateNoiseCorrelation(const Grid& grid, int step)
   return detail::estimateNoiseCorrelation(grid, step, 1);
 }
 
+int
+detail::dilationReferenceLag(int width)
+{
+  return std::clamp((tuned::kDilationReferenceLag * width + tuned::kDilationReferenceWidth / 2) /
+                        tuned::kDilationReferenceWidth,
+                    tuned::kDilationMinLag, tuned::kDilationMaxLag);
+}
+
 NoiseCorrelation
 detail::estimateNoiseCorrelation(const Grid& grid, int step, int threads)
 {

@@ -300,6 +300,11 @@ normalAndMoveEntries()
             "candidates whose patches match the hole's border, never across a depth edge; filled points are "
             "marked; 0 = off")
       .cli("fill-holes").ros("fill_holes").pass("fill_holes"),
+    Entry("reuse_estimates", &P::reuse_estimates)
+      .docs("[Estimates carried in a stream](#estimates-carried-in-a-stream)")
+      .help("carry the noise profile and the automatic dilation from frame to frame of a stream, estimated "
+            "afresh when a sparse check says the sensor's noise or the frame's ranges changed")
+      .cli("reuse-estimates").ros("reuse_estimates").pass("reuse_estimates"),
   };
   // clang-format on
 }
@@ -547,12 +552,14 @@ setChoice(const ParameterEntry& entry, FilterParameters& p, int value)
 std::string
 parameterTable()
 {
-  const FilterParameters recommended = FilterParameters::recommended(), paper = FilterParameters::paper();
-  std::string table = "| field | default | paper | unit | valid values | meaning |\n"
-                      "|---|---|---|---|---|---|\n";
+  const FilterParameters recommended = FilterParameters::recommended(), live = FilterParameters::live(),
+                         paper = FilterParameters::paper();
+  std::string table = "| field | default | live | paper | unit | valid values | meaning |\n"
+                      "|---|---|---|---|---|---|---|\n";
   for (const ParameterEntry& entry : parameterRegistry())
     table += "| `" + std::string(entry.name) + "` | " + tableValue(entry, recommended) + " | " +
-             tableValue(entry, paper) + " | " + (*entry.unit ? entry.unit : "-") + " | " +
+             tableValue(entry, live) + " | " + tableValue(entry, paper) + " | " + (*entry.unit ? entry.unit : "-") +
+             " | " +
              cell(tableValidValues(entry)) + " | " + cell(entry.help) +
              (entry.docs_section ? std::string("; see ") + entry.docs_section : std::string()) + " |\n";
   return table;

@@ -75,7 +75,12 @@
   X(kSurroundSteps, float, 4.0f, "generated", "outliers: farther than 4 median steps of the surroundings")            \
   X(kSideReach, int, 5, "generated", "outliers: the side vote's surroundings, 11 x 11 pixels")                        \
   X(kFootprints, float, 3.0f, "generated", "outliers: 'on a surface' within at least 3 pixel footprints")             \
-  X(kHistoryChangeSigmas, float, 2.0f, "generated", "history starts over below the filter's 3 sigmas of change")
+  X(kHistoryChangeSigmas, float, 2.0f, "generated", "history starts over below the filter's 3 sigmas of change")  \
+  X(kReuseCheckColumns, int, 80, "derived", "carried estimates: a check lattice of 80 columns, 8 px apart in VGA")   \
+  X(kReuseCheckGroups, int, 16, "derived", "carried estimates: a scale's error from the spread of 16 sample groups") \
+  X(kReuseTestSigmas, double, 4.0, "derived", "carried estimates: a change beyond 4 standard errors is a change")   \
+  X(kReuseRangeTail, double, 0.05, "derived", "carried estimates: the ranges' 5 % and 95 % quantiles")             \
+  X(kReuseMaxFrames, int, 30, "derived", "carried estimates: made afresh at least once a second at 30 Hz")
 
 #define RANGE_NLM_TUNED_NUMBERS(X)                                                                                    \
   RANGE_NLM_TUNED_PIPELINE(X)                                                                                         \

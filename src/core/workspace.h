@@ -77,6 +77,12 @@ struct Workspace
   /// along their rays, does not change the frame's noise.
   const Grid* profiled = nullptr;
   NoiseProfile current_profile;
+  /// FilterParameters::reuse_estimates: the estimates carried from the stream's earlier frames,
+  /// the dilation the carried estimates give the running call (0: none, estimate it), the
+  /// automatic dilation the running call chose (0: none), and the check's sampled ranges.
+  detail::CarriedEstimates estimates;
+  int known_dilation = 0, chosen_dilation = 0;
+  std::vector<float> signature_scratch;
   /// If set, told where each phase of a run begins and ends. Not owned.
   StageObserver* observer = nullptr;
 };

@@ -189,6 +189,7 @@ TEST(ParameterRegistry, DocsShowTheGeneratedTable)
       << table;
   for (const ParameterEntry& entry : parameterRegistry())
     EXPECT_NE(table.find("| `" + std::string(entry.name) + "` | "), std::string::npos) << entry.name;
-  EXPECT_NE(table.find("| `patch_guide` | true | false |"), std::string::npos) << table;
-  EXPECT_NE(table.find("| `dilation` | 0 (automatic) | 1 |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| `patch_guide` | true | true | false |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| `dilation` | 0 (automatic) | 0 (automatic) | 1 |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| `reuse_estimates` | false | true | false |"), std::string::npos) << table;
 }

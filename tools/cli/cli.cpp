@@ -221,8 +221,8 @@ helpValue(const ParameterEntry& entry, const FilterParameters& p)
   return entry.zero_means && text == "0" ? entry.zero_means : text;
 }
 
-/// The entry's help with the presets' values: "[default: v]" where they agree, else
-/// "[preset: v; paper: w]".
+/// The entry's help with the presets' values: "[default: v]" where they all agree, else
+/// "[default: v; live: w; paper: x]".
 std::string
 optionHelp(const ParameterEntry& entry)
 {
@@ -230,9 +230,11 @@ optionHelp(const ParameterEntry& entry)
   if (entry.cli_always)
     return help;
   const std::string recommended = helpValue(entry, FilterParameters::recommended());
+  const std::string live = helpValue(entry, FilterParameters::live());
   const std::string paper = helpValue(entry, FilterParameters::paper());
-  return help + (recommended == paper ? " [default: " + recommended + "]"
-                                      : " [preset: " + recommended + "; paper: " + paper + "]");
+  return help + (recommended == paper && recommended == live
+                     ? " [default: " + recommended + "]"
+                     : " [default: " + recommended + "; live: " + live + "; paper: " + paper + "]");
 }
 
 /// The option of an entry, its value of the field's own type (an enumerator by name).
@@ -298,8 +300,8 @@ void
 addFilterOptions(po::options_description& options)
 {
   options.add_options()("preset", po::value<std::string>()->default_value("default"),
-                        "parameter preset: 'default' (recommended) or 'paper' (the literal method); options below "
-                        "override it");
+                        "parameter preset: 'default' (the most accurate, for recorded data), 'live' (for a live "
+                        "camera's frame rate) or 'paper' (the literal method); options below override it");
   for (const ParameterEntry& entry : parameterRegistry()) {
     if (entry.cli_option)
       addOption(options, entry);

@@ -310,6 +310,9 @@ struct FilterRun
   /// in the current frame and was given a range by the hole filling, 0 elsewhere; empty when the
   /// hole filling is off.
   std::vector<unsigned char> filled;
+  /// FilterParameters::reuse_estimates: the run used the estimates carried from an earlier frame
+  /// (false: it estimated them, or reuse is off).
+  bool estimates_reused = false;
 };
 
 /// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.

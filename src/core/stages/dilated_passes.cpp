@@ -121,9 +121,7 @@ int
 detail::automaticDilation(const Grid& frame, int threads)
 {
   const int width = tuned::kDilationReferenceWidth, rounding = tuned::kDilationReferenceWidth / 2;
-  const int lag =
-      std::clamp((tuned::kDilationReferenceLag * frame.width + rounding) / width, tuned::kDilationMinLag,
-                 tuned::kDilationMaxLag);
+  const int lag = dilationReferenceLag(frame.width);
   const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, tuned::kDilationCorrelationStep, threads);
   const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
   const int k = far > 0.0f && near < tuned::kCorrelatedVarianceRatio * far
@@ -141,11 +139,14 @@ detail::automaticDilation(const Grid& frame, int threads)
 }
 
 int
-detail::chooseDilation(const Grid& input, const FilterParameters& parameters, StageTracker& split)
+detail::chooseDilation(const Grid& input, const FilterParameters& parameters, StageTracker& split,
+                       Workspace& workspace)
 {
   const bool empty = input.countValid() == 0;
   int k = parameters.dilation;
-  if (k == 0) {
+  if (k == 0 && workspace.known_dilation > 0 && !empty) {
+    k = workspace.known_dilation; // carried from an earlier frame of the stream
+  } else if (k == 0) {
     split.start(Stage::dilation);
     // Automatic: contiguous windows unless every phase still holds the windows, and nothing to
     // estimate in a frame without a valid point (runContiguous says so).
@@ -154,6 +155,7 @@ detail::chooseDilation(const Grid& input, const FilterParameters& parameters, St
     k = empty ? 1 : automaticDilation(input, resolveThreads(parameters.threads));
     if (input.width / k < needed || input.height / k < needed)
       k = 1;
+    workspace.chosen_dilation = empty ? 0 : k;
   }
   return empty ? 1 : k;
 }

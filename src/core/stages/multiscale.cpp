@@ -274,7 +274,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
   FilterParameters fine = oneScaleParameters(parameters);
   {
     StageTracker split(workspace.observer, 0);
-    fine.dilation = chooseDilation(input, parameters, split);
+    fine.dilation = chooseDilation(input, parameters, split, workspace);
   }
   StageTracker stage(workspace.observer, 0);
   stage.start(Stage::pyramid);

@@ -13,6 +13,21 @@ namespace detail
 
 // Once per call, on the frames as given (runFilter).
 
+/// The signature of `frame` (`scratch` holds its samples). (carried_estimates.cpp)
+EstimateSignature
+estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float>& scratch);
+
+/// Whether `carried` still describes `frame` (signature `now`) under `parameters`: made with the
+/// same parameters on a frame of the same size and viewpoint less than tuned::kReuseMaxFrames
+/// frames ago; each of the three scales within tuned::kReuseTestSigmas combined standard errors of
+/// the carried one (on the log scale); and no more of the lattice's ranges outside the carried
+/// quantiles than their share, 2 kReuseRangeTail, plus kReuseTestSigmas binomial standard errors.
+/// (carried_estimates.cpp)
+bool
+carriedEstimatesHold(const CarriedEstimates& carried, const EstimateSignature& now, const Grid& frame,
+                     const FilterParameters& parameters);
+
+
 /// The current frame's noise profile as the call was given the frame (workspace.current_profile):
 /// estimated on `frame` (the frame, or its copy) the first time, known afterwards. Throws
 /// UnfilterableFrame as estimateNoiseProfile does. (frame_bandwidths.cpp)
@@ -37,9 +52,11 @@ levelNeighbourFrames(const std::vector<const Grid*>& frames, int center, const F
                      const Viewpoint& viewpoint, Workspace& workspace);
 
 /// The dilation the run uses: FilterParameters::dilation, or the automatic one (timed as
-/// Stage::dilation on `split`); 1 for a frame without a valid point. (dilated_passes.cpp)
+/// Stage::dilation on `split`; workspace.known_dilation instead where the carried estimates gave
+/// one, see FilterParameters::reuse_estimates); 1 for a frame without a valid point. The
+/// automatic one goes to workspace.chosen_dilation. (dilated_passes.cpp)
 int
-chooseDilation(const Grid& input, const FilterParameters& parameters, StageTracker& split);
+chooseDilation(const Grid& input, const FilterParameters& parameters, StageTracker& split, Workspace& workspace);
 
 /// The dilated passes with dilation k > 1: each phase (u mod k, v mod k) of the frames filtered
 /// as a grid of its own whose neighbours are k pixels apart, the phases merged, then (with more

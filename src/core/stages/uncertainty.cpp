@@ -35,9 +35,7 @@ CorrelatedNoise
 correlatedNoise(const Grid& frame, int search_window, int threads)
 {
   CorrelatedNoise out;
-  const int lag = std::clamp((tuned::kDilationReferenceLag * frame.width + tuned::kDilationReferenceWidth / 2) /
-                                 tuned::kDilationReferenceWidth,
-                             tuned::kDilationMinLag, tuned::kDilationMaxLag);
+  const int lag = dilationReferenceLag(frame.width);
   const NoiseCorrelation c = estimateNoiseCorrelation(frame, tuned::kDilationCorrelationStep, threads);
   const float far = c.scale[lag - 1] * c.scale[lag - 1];
   if (!(far > 0.0f) || !(c.scale[0] * c.scale[0] < tuned::kCorrelatedVarianceRatio * far))

@@ -15,6 +15,9 @@
 namespace range_nlm_ros
 {
 
+/// The preset of a node whose ~preset is not set: the live camera's setting.
+extern const char* const kDefaultPreset;
+
 /// FilterParameters from a node's private parameters: the preset, overridden by every parameter
 /// of the registry the node has. Integers are read as integers (a double only with an integral
 /// value), fractional parameters as doubles (an int is taken too), enumerators by name. Throws
@@ -44,8 +47,8 @@ struct NodeSettings
   int queue_size = 2;
   /// image_transport of the depth input ("raw", "compressedDepth", ...).
   std::string image_transport = "raw";
-  /// The preset the parameters start from.
-  std::string preset = "default";
+  /// The preset the parameters start from (~preset; kDefaultPreset, "live", when not set).
+  std::string preset = kDefaultPreset;
   /// The private parameters that were set, by their names (without "~"), in the order read.
   std::vector<std::string> given;
 };
