@@ -89,7 +89,7 @@ def _intrinsics(intrinsics):
 def read_intrinsics(path):
     """Reads an intrinsics.txt file (``key value`` lines: fx, fy, cx, cy, depth_scale, width,
     height; docs/usage.md). Errors name the file and line (ValueError)."""
-    return _range_nlm.read_intrinsics(str(path))
+    return _range_nlm.read_intrinsics(path)
 
 
 def depth_to_points(depth, intrinsics=None, depth_scale=None):

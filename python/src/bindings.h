@@ -86,6 +86,12 @@ private:
   int before_ = 1;
 };
 
+/// The path a path argument names, as Python's open() takes it: a str, bytes or os.PathLike
+/// (os.fspath), encoded as os.fsencode does. Throws TypeError for anything else and ValueError
+/// for an embedded null byte (which would cut the path short), both naming the argument `name`.
+std::string
+pathArgument(const py::handle& value, const char* name);
+
 /// The FilterParameters of a Parameters object, or of None (the recommended setting).
 FilterParameters
 parametersOf(const py::handle& parameters);
