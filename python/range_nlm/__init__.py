@@ -106,7 +106,8 @@ def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **par
         invalid point, which stays NaN in x, y and z. An infinite coordinate is refused.
     parameters: a Parameters object, 'default' or 'paper', or None (the recommended setting);
         the keyword arguments override it (see Parameters.registry() for every one).
-    viewpoint: the sensor position (x, y, z), default the origin (as a PCD without VIEWPOINT).
+    viewpoint: the sensor position (x, y, z), default the origin (as a PCD without VIEWPOINT);
+        finite (a non-finite coordinate raises ValueError).
     return_info: also return a dict with the bandwidths the filter chose
         (distance_bandwidth, similarity_bandwidth, mu_d, sigma_s), outliers_moved, ms, and
         filtered / reason (a frame that cannot be filtered, e.g. all NaN, comes back unchanged).

@@ -41,6 +41,7 @@ writePcd(const py::handle& path_argument, const py::handle& points, const std::v
   if (viewpoint.size() != 3)
     throw py::value_error("range_nlm: viewpoint must be (x, y, z), got " + std::to_string(viewpoint.size()) +
                           " values");
+  checkViewpoint({viewpoint[0], viewpoint[1], viewpoint[2]}, "viewpoint"); // as the reader checks VIEWPOINT
   const Cloud::Ptr cloud = cloudFromPoints(points, "points", {viewpoint[0], viewpoint[1], viewpoint[2], 0.0f});
   py::gil_scoped_release release;
   io::saveCloudAtomic(path, *cloud);

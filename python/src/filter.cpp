@@ -103,6 +103,7 @@ viewpointOf(const py::handle& viewpoint)
   const std::vector<float> v = viewpoint.cast<std::vector<float>>();
   if (v.size() != 3)
     throw py::value_error("range_nlm: viewpoint must be (x, y, z), got " + std::to_string(v.size()) + " values");
+  checkViewpoint({v[0], v[1], v[2]}, "viewpoint");
   return {v[0], v[1], v[2], 0.0f};
 }
 

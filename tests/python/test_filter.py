@@ -132,6 +132,20 @@ def test_infinite_coordinate_is_refused_naming_the_pixel():
         range_nlm.denoise(points)
 
 
+@pytest.mark.parametrize("bad, text", [(np.inf, "inf"), (-np.inf, "-inf"), (np.nan, "nan")])
+def test_non_finite_viewpoint_is_refused_naming_it_and_its_value(tmp_path, bad, text):
+    # Ranges are measured from the viewpoint: a non-finite one would leave nothing to filter.
+    points = plane(width=20, height=10)
+    message = r"viewpoint must be finite, got \(%s, 0, 0\)" % text
+    with pytest.raises(ValueError, match=message):
+        range_nlm.denoise(points, viewpoint=(bad, 0, 0))
+    # write_pcd refuses what read_pcd would refuse.
+    with pytest.raises(ValueError, match=message):
+        range_nlm.write_pcd(str(tmp_path / "far.pcd"), points, viewpoint=(bad, 0, 0))
+    assert not (tmp_path / "far.pcd").exists()
+    assert range_nlm.denoise(points, viewpoint=(0.5, 0, -1), **SMALL).shape == points.shape
+
+
 def test_depth_errors_name_the_problem():
     with pytest.raises(TypeError, match="uint16, float32 or float64"):
         range_nlm.denoise_depth(np.ones((8, 8), np.int32))
