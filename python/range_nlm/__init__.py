@@ -113,7 +113,8 @@ def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **par
         filtered / reason (a frame that cannot be filtered, e.g. all NaN, comes back unchanged).
 
     Returns an array of the input's shape and dtype (and the dict with return_info). The GIL is
-    released while the frame is filtered.
+    released while the frame is filtered; Ctrl-C stops the call (KeyboardInterrupt) at the
+    filter's next stage.
     """
     result, info = _range_nlm._denoise(points, _parameters(parameters, params), viewpoint)
     return (result, info) if return_info else result
@@ -171,7 +172,8 @@ class Stream:
 
     def push(self, frame):
         """Adds the next frame; returns the frames that became ready. A refused frame (wrong size
-        or dtype, an infinite coordinate) raises and leaves the stream as it was."""
+        or dtype, an infinite coordinate) raises and leaves the stream as it was. Interrupted
+        (KeyboardInterrupt), the push keeps its frame: its result comes with the next call."""
         out = self._stream.push(frame)
         self.info = self._stream.last_info()
         return out

@@ -76,10 +76,29 @@ ThreadCount::~ThreadCount()
 #endif
 }
 
+Interruptible::Interruptible(Stream& stream) : stream_(stream)
+{
+  stream_.setStageObserver(this);
+}
+
+Interruptible::~Interruptible()
+{
+  stream_.setStageObserver(nullptr);
+}
+
+void
+Interruptible::begin(Stage, int)
+{
+  py::gil_scoped_acquire gil;
+  // Signal handlers run on the main thread only: elsewhere this returns 0 at once.
+  if (PyErr_CheckSignals() != 0)
+    throw Interrupted();
+}
+
 namespace
 {
 
-/// Filters one frame (GIL released); returns the result and its record.
+/// Filters one frame (GIL released; Ctrl-C stops it); returns the result and its record.
 std::pair<Cloud::Ptr, Stream::OutputInfo>
 filterFrame(const Cloud::Ptr& frame, const FilterParameters& parameters)
 {
@@ -87,6 +106,7 @@ filterFrame(const Cloud::Ptr& frame, const FilterParameters& parameters)
   const ThreadCount threads(parameters.threads);
   CachedStream& cached = staticStream(parameters, *frame);
   try {
+    const Interruptible interruptible(*cached.stream); // ends before the stream may go below
     const std::vector<Stream::CloudPtr> out = cached.stream->push(frame);
     return {out.front(), cached.stream->lastOutputs().front()};
   } catch (...) {
@@ -188,6 +208,15 @@ depthScaleOf(const py::handle& depth, const DepthIntrinsics& intrinsics, const p
 void
 bindFilter(py::module_& m)
 {
+  py::register_exception_translator([](std::exception_ptr error) {
+    try {
+      if (error)
+        std::rethrow_exception(error);
+    } catch (const Interrupted&) {
+      if (!PyErr_Occurred()) // set by the signal handler that raised
+        PyErr_SetNone(PyExc_KeyboardInterrupt);
+    }
+  });
   m.def("_denoise", &denoise, py::arg("points"), py::arg("parameters"), py::arg("viewpoint"));
   m.def("_denoise_depth", &denoiseDepth, py::arg("depth"), py::arg("intrinsics"), py::arg("depth_scale"),
         py::arg("output"), py::arg("parameters"));
