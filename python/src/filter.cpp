@@ -86,11 +86,19 @@ Interruptible::~Interruptible()
   stream_.setStageObserver(nullptr);
 }
 
+namespace
+{
+/// Python runs signal handlers on its main thread only: the calls of other threads need not
+/// take the GIL to look (they would wait for it while the main thread runs Python code).
+unsigned long main_thread = 0;
+} // namespace
+
 void
 Interruptible::begin(Stage, int)
 {
+  if (PyThread_get_thread_ident() != main_thread)
+    return;
   py::gil_scoped_acquire gil;
-  // Signal handlers run on the main thread only: elsewhere this returns 0 at once.
   if (PyErr_CheckSignals() != 0)
     throw Interrupted();
 }
@@ -208,6 +216,7 @@ depthScaleOf(const py::handle& depth, const DepthIntrinsics& intrinsics, const p
 void
 bindFilter(py::module_& m)
 {
+  main_thread = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
   py::register_exception_translator([](std::exception_ptr error) {
     try {
       if (error)
