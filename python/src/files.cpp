@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <stdexcept>
 
 namespace range_nlm
 {
@@ -188,7 +189,33 @@ pathArgument(const py::handle& value, const char* name)
 void
 bindFiles(py::module_& m)
 {
-  py::register_exception<io::InputError>(m, "InputError", PyExc_OSError);
+  static const py::handle input_error = py::register_exception<io::InputError>(m, "InputError", PyExc_OSError);
+  // A message that names a file by a path which is not UTF-8 (a bytes path) goes out with the
+  // path's other bytes escaped (\xff), where pybind11's own translation would give an empty one.
+  py::register_exception_translator([](std::exception_ptr error) {
+    try {
+      if (error)
+        std::rethrow_exception(error);
+    } catch (const py::builtin_exception&) {
+      throw;
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      const py::object text =
+          py::reinterpret_steal<py::object>(PyUnicode_DecodeUTF8(what.data(), py::ssize_t(what.size()), "strict"));
+      if (text) // UTF-8: as pybind11 translates it
+        throw;
+      PyErr_Clear();
+      const py::object escaped = py::reinterpret_steal<py::object>(
+          PyUnicode_DecodeUTF8(what.data(), py::ssize_t(what.size()), "backslashreplace"));
+      const bool value_error = dynamic_cast<const std::invalid_argument*>(&e) ||
+                               dynamic_cast<const std::domain_error*>(&e) ||
+                               dynamic_cast<const std::length_error*>(&e) || dynamic_cast<const std::range_error*>(&e);
+      PyErr_SetObject(dynamic_cast<const io::InputError*>(&e) ? input_error.ptr()
+                      : value_error                           ? PyExc_ValueError
+                                                              : PyExc_RuntimeError,
+                      escaped.ptr());
+    }
+  });
   bindIntrinsics(m);
   m.def("read_pcd", &readPcd, py::arg("path"), py::arg("return_viewpoint") = false,
         "Reads an organized PCD file (checked as range_nlm_denoise reads it) as an H x W x 3 float32 array, "

@@ -114,3 +114,15 @@ def test_a_path_with_an_embedded_null_byte_is_refused_as_open_refuses_it(tmp_pat
     with pytest.raises(ValueError, match="embedded null byte"):
         open(str(tmp_path / file_name) + "\0/../x", "rb")
     assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_a_bytes_path_need_not_be_utf8_and_errors_still_name_it(tmp_path):
+    points = plane(width=8, height=6)
+    path = os.fsencode(tmp_path) + b"/\xff.pcd"
+    range_nlm.write_pcd(path, points)
+    assert os.listdir(os.fsencode(tmp_path)) == [b"\xff.pcd"]
+    assert np.array_equal(bits(range_nlm.read_pcd(path)), bits(points))
+    with pytest.raises(range_nlm.InputError, match=r"\\xffmissing.pcd'"):
+        range_nlm.read_pcd(os.fsencode(tmp_path) + b"/\xffmissing.pcd")
+    with pytest.raises(ValueError, match=r"\\xffmissing.png'"):
+        range_nlm.read_depth_png(os.fsencode(tmp_path) + b"/\xffmissing.png")
