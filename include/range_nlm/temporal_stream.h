@@ -65,8 +65,8 @@ public:
 
   /// Adds the next frame; returns the frames that became ready (zero or one). Throws
   /// std::invalid_argument, leaving the stream as it was (the frame can be skipped), if the
-  /// frame's size differs from the first frame's, its point count from width x height, or it
-  /// holds an infinite coordinate.
+  /// frame's size differs from the first frame's, its point count from width x height, it
+  /// holds an infinite coordinate, or its viewpoint (sensor_origin_) is not finite.
   /// With `wanted` false the frame is only a neighbour of the others: it is not filtered and its
   /// output is a null pointer (for resuming a run, or a pass of a schedule whose next pass reads
   /// only some frames). Such a frame may itself be null if no wanted frame's window holds it;

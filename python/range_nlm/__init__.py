@@ -89,7 +89,7 @@ def _intrinsics(intrinsics):
 def read_intrinsics(path):
     """Reads an intrinsics.txt file (``key value`` lines: fx, fy, cx, cy, depth_scale, width,
     height; docs/usage.md). Errors name the file and line (ValueError)."""
-    return _range_nlm.read_intrinsics(str(path))
+    return _range_nlm.read_intrinsics(path)
 
 
 def depth_to_points(depth, intrinsics=None, depth_scale=None):
@@ -107,13 +107,15 @@ def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **par
     parameters: a Parameters object, a preset name ('default', 'live' for a live camera's frame
         rate, or 'paper'), or None (the recommended setting, 'default');
         the keyword arguments override it (see Parameters.registry() for every one).
-    viewpoint: the sensor position (x, y, z), default the origin (as a PCD without VIEWPOINT).
+    viewpoint: the sensor position (x, y, z), default the origin (as a PCD without VIEWPOINT);
+        finite (a non-finite coordinate raises ValueError).
     return_info: also return a dict with the bandwidths the filter chose
         (distance_bandwidth, similarity_bandwidth, mu_d, sigma_s), outliers_moved, ms, and
         filtered / reason (a frame that cannot be filtered, e.g. all NaN, comes back unchanged).
 
     Returns an array of the input's shape and dtype (and the dict with return_info). The GIL is
-    released while the frame is filtered.
+    released while the frame is filtered; Ctrl-C stops the call (KeyboardInterrupt) at the
+    filter's next stage.
     """
     result, info = _range_nlm._denoise(points, _parameters(parameters, params), viewpoint)
     return (result, info) if return_info else result
@@ -174,7 +176,8 @@ class Stream:
 
     def push(self, frame):
         """Adds the next frame; returns the frames that became ready. A refused frame (wrong size
-        or dtype, an infinite coordinate) raises and leaves the stream as it was."""
+        or dtype, an infinite coordinate) raises and leaves the stream as it was. Interrupted
+        (KeyboardInterrupt), the push keeps its frame: its result comes with the next call."""
         out = self._stream.push(frame)
         self.info = self._stream.last_info()
         return out

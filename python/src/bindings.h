@@ -86,6 +86,37 @@ private:
   int before_ = 1;
 };
 
+/// The path a path argument names, as Python's open() takes it: a str, bytes or os.PathLike
+/// (os.fspath), encoded as os.fsencode does. Throws TypeError for anything else and ValueError
+/// for an embedded null byte (which would cut the path short), both naming the argument `name`.
+std::string
+pathArgument(const py::handle& value, const char* name);
+
+/// Thrown out of a filter run when a Python signal handler raised (Ctrl-C: KeyboardInterrupt);
+/// the Python exception is already set, and the module's exception translator lets it through.
+struct Interrupted : std::exception
+{
+  const char* what() const noexcept override { return "range_nlm: interrupted"; }
+};
+
+/// Makes the runs of `stream` interruptible while it exists: at the start of every stage (the
+/// stream's StageObserver, called on the calling thread between parallel regions) the GIL is
+/// taken for a moment and Python's signal handlers run (PyErr_CheckSignals); if one raised, the
+/// run stops with Interrupted. The stream keeps no half-filtered result: its next run starts over.
+class Interruptible : private StageObserver
+{
+public:
+  explicit Interruptible(Stream& stream);
+  ~Interruptible();
+  Interruptible(const Interruptible&) = delete;
+  Interruptible& operator=(const Interruptible&) = delete;
+
+private:
+  void begin(Stage stage, int iteration) override;
+  void end(Stage, int) override {}
+  Stream& stream_;
+};
+
 /// The FilterParameters of a Parameters object, or of None (the recommended setting).
 FilterParameters
 parametersOf(const py::handle& parameters);

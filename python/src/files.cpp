@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <stdexcept>
 
 namespace range_nlm
 {
@@ -18,8 +19,9 @@ namespace
 {
 
 py::object
-readPcd(const std::string& path, bool return_viewpoint)
+readPcd(const py::handle& path_argument, bool return_viewpoint)
 {
+  const std::string path = pathArgument(path_argument, "path");
   io::LoadedCloud loaded;
   Cloud cloud;
   {
@@ -34,19 +36,22 @@ readPcd(const std::string& path, bool return_viewpoint)
 }
 
 void
-writePcd(const std::string& path, const py::handle& points, const std::vector<float>& viewpoint)
+writePcd(const py::handle& path_argument, const py::handle& points, const std::vector<float>& viewpoint)
 {
+  const std::string path = pathArgument(path_argument, "path");
   if (viewpoint.size() != 3)
     throw py::value_error("range_nlm: viewpoint must be (x, y, z), got " + std::to_string(viewpoint.size()) +
                           " values");
+  checkViewpoint({viewpoint[0], viewpoint[1], viewpoint[2]}, "viewpoint"); // as the reader checks VIEWPOINT
   const Cloud::Ptr cloud = cloudFromPoints(points, "points", {viewpoint[0], viewpoint[1], viewpoint[2], 0.0f});
   py::gil_scoped_release release;
   io::saveCloudAtomic(path, *cloud);
 }
 
 py::array
-readDepth(const std::string& path)
+readDepth(const py::handle& path_argument)
 {
+  const std::string path = pathArgument(path_argument, "path");
   DepthImage image;
   {
     py::gil_scoped_release release;
@@ -58,8 +63,9 @@ readDepth(const std::string& path)
 }
 
 void
-writeDepth(const std::string& path, const py::handle& depth)
+writeDepth(const py::handle& path_argument, const py::handle& depth)
 {
+  const std::string path = pathArgument(path_argument, "path");
   if (!py::isinstance<py::array_t<std::uint16_t>>(depth) ||
       py::reinterpret_borrow<py::array>(depth).dtype().char_() != 'H' ||
       py::reinterpret_borrow<py::array>(depth).ndim() != 2)
@@ -90,9 +96,10 @@ modeNamed(const std::string& mode)
 /// Writes `before` and `after` side by side on one scale (range_nlm_render --before --after);
 /// returns the curvature scale used (0 in shaded mode).
 float
-renderBeforeAfter(const py::handle& before, const py::handle& after, const std::string& path,
+renderBeforeAfter(const py::handle& before, const py::handle& after, const py::handle& path_argument,
                   const std::string& mode, float curvature_limit)
 {
+  const std::string path = pathArgument(path_argument, "path");
   RenderParameters parameters;
   parameters.curvature_limit = curvature_limit;
   const Cloud::Ptr a = cloudFromPoints(before, "before", Eigen::Vector4f::Zero());
@@ -150,16 +157,65 @@ bindIntrinsics(py::module_& m)
       });
   m.def("_depth_to_points", &depthToPoints, py::arg("depth"), py::arg("intrinsics"), py::arg("depth_scale"));
   m.def(
-      "read_intrinsics", [](const std::string& path) { return readIntrinsics(path); }, py::arg("path"),
-      "Reads an intrinsics.txt file (fx, fy, cx, cy, depth_scale, width, height; see docs/usage.md).");
+      "read_intrinsics", [](const py::handle& path) { return readIntrinsics(pathArgument(path, "path")); },
+      py::arg("path"), "Reads an intrinsics.txt file (fx, fy, cx, cy, depth_scale, width, height; see docs/usage.md).");
 }
 
 } // namespace
 
+std::string
+pathArgument(const py::handle& value, const char* name)
+{
+  // os.fspath(), then os.fsencode() for a str: the bytes the operating system is given.
+  const py::object path = py::reinterpret_steal<py::object>(PyOS_FSPath(value.ptr()));
+  if (!path) {
+    PyErr_Clear();
+    throw py::type_error("range_nlm: " + std::string(name) + " must be a str, bytes or os.PathLike path, got " +
+                         py::str(value.get_type().attr("__name__")).cast<std::string>());
+  }
+  const py::bytes encoded = PyUnicode_Check(path.ptr())
+                                ? py::reinterpret_steal<py::bytes>(PyUnicode_EncodeFSDefault(path.ptr()))
+                                : py::reinterpret_borrow<py::bytes>(path);
+  if (!encoded)
+    throw py::error_already_set();
+  std::string text = encoded;
+  // The C++ side would end the path at the first NUL and open another file.
+  if (text.find('\0') != std::string::npos)
+    throw py::value_error("range_nlm: " + std::string(name) +
+                          " has an embedded null byte: " + py::repr(path).cast<std::string>());
+  return text;
+}
+
 void
 bindFiles(py::module_& m)
 {
-  py::register_exception<io::InputError>(m, "InputError", PyExc_OSError);
+  static const py::handle input_error = py::register_exception<io::InputError>(m, "InputError", PyExc_OSError);
+  // A message that names a file by a path which is not UTF-8 (a bytes path) goes out with the
+  // path's other bytes escaped (\xff), where pybind11's own translation would give an empty one.
+  py::register_exception_translator([](std::exception_ptr error) {
+    try {
+      if (error)
+        std::rethrow_exception(error);
+    } catch (const py::builtin_exception&) {
+      throw;
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      const py::object text =
+          py::reinterpret_steal<py::object>(PyUnicode_DecodeUTF8(what.data(), py::ssize_t(what.size()), "strict"));
+      if (text) // UTF-8: as pybind11 translates it
+        throw;
+      PyErr_Clear();
+      const py::object escaped = py::reinterpret_steal<py::object>(
+          PyUnicode_DecodeUTF8(what.data(), py::ssize_t(what.size()), "backslashreplace"));
+      const bool value_error = dynamic_cast<const std::invalid_argument*>(&e) ||
+                               dynamic_cast<const std::domain_error*>(&e) ||
+                               dynamic_cast<const std::length_error*>(&e) || dynamic_cast<const std::range_error*>(&e);
+      PyErr_SetObject(dynamic_cast<const io::InputError*>(&e) ? input_error.ptr()
+                      : value_error                           ? PyExc_ValueError
+                                                              : PyExc_RuntimeError,
+                      escaped.ptr());
+    }
+  });
   bindIntrinsics(m);
   m.def("read_pcd", &readPcd, py::arg("path"), py::arg("return_viewpoint") = false,
         "Reads an organized PCD file (checked as range_nlm_denoise reads it) as an H x W x 3 float32 array, "

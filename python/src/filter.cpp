@@ -76,10 +76,37 @@ ThreadCount::~ThreadCount()
 #endif
 }
 
+Interruptible::Interruptible(Stream& stream) : stream_(stream)
+{
+  stream_.setStageObserver(this);
+}
+
+Interruptible::~Interruptible()
+{
+  stream_.setStageObserver(nullptr);
+}
+
+namespace
+{
+/// Python runs signal handlers on its main thread only: the calls of other threads need not
+/// take the GIL to look (they would wait for it while the main thread runs Python code).
+unsigned long main_thread = 0;
+} // namespace
+
+void
+Interruptible::begin(Stage, int)
+{
+  if (PyThread_get_thread_ident() != main_thread)
+    return;
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() != 0)
+    throw Interrupted();
+}
+
 namespace
 {
 
-/// Filters one frame (GIL released); returns the result and its record.
+/// Filters one frame (GIL released; Ctrl-C stops it); returns the result and its record.
 std::pair<Cloud::Ptr, Stream::OutputInfo>
 filterFrame(const Cloud::Ptr& frame, const FilterParameters& parameters)
 {
@@ -87,6 +114,7 @@ filterFrame(const Cloud::Ptr& frame, const FilterParameters& parameters)
   const ThreadCount threads(parameters.threads);
   CachedStream& cached = staticStream(parameters, *frame);
   try {
+    const Interruptible interruptible(*cached.stream); // ends before the stream may go below
     const std::vector<Stream::CloudPtr> out = cached.stream->push(frame);
     return {out.front(), cached.stream->lastOutputs().front()};
   } catch (...) {
@@ -103,6 +131,7 @@ viewpointOf(const py::handle& viewpoint)
   const std::vector<float> v = viewpoint.cast<std::vector<float>>();
   if (v.size() != 3)
     throw py::value_error("range_nlm: viewpoint must be (x, y, z), got " + std::to_string(v.size()) + " values");
+  checkViewpoint({v[0], v[1], v[2]}, "viewpoint");
   return {v[0], v[1], v[2], 0.0f};
 }
 
@@ -187,6 +216,16 @@ depthScaleOf(const py::handle& depth, const DepthIntrinsics& intrinsics, const p
 void
 bindFilter(py::module_& m)
 {
+  main_thread = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  py::register_exception_translator([](std::exception_ptr error) {
+    try {
+      if (error)
+        std::rethrow_exception(error);
+    } catch (const Interrupted&) {
+      if (!PyErr_Occurred()) // set by the signal handler that raised
+        PyErr_SetNone(PyExc_KeyboardInterrupt);
+    }
+  });
   m.def("_denoise", &denoise, py::arg("points"), py::arg("parameters"), py::arg("viewpoint"));
   m.def("_denoise_depth", &denoiseDepth, py::arg("depth"), py::arg("intrinsics"), py::arg("depth_scale"),
         py::arg("output"), py::arg("parameters"));

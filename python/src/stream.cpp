@@ -88,17 +88,26 @@ private:
         throw std::runtime_error(broken_);
       const std::size_t held = stream_.heldFrames();
       try {
+        const Interruptible interruptible(stream_);
         ready = step();
+      } catch (const Interrupted&) {
+        // Stopped in the run of the first frame this call filters: the stream is as it was
+        // before that run, with a pushed frame held (its result comes with the next call) and
+        // the run done again by the next push or flush. Stopped in a later run, the frames
+        // filtered before it are lost.
+        if (stream_.lastOutputs().size() > 1)
+          broken_ = "range_nlm: the stream cannot go on after an interruption that lost filtered frames";
+        else if (format)
+          takeIn(*format);
+        throw;
       } catch (const std::exception& e) {
         // A refused frame leaves the stream as it was; a run that failed half-way does not.
         if (stream_.heldFrames() != held)
           broken_ = std::string("range_nlm: the stream cannot go on after an earlier failure: ") + e.what();
         throw;
       }
-      if (format) {
-        formats_.push_back(*format);
-        ++pushed_;
-      }
+      if (format)
+        takeIn(*format);
       for (std::size_t k = 0; k < ready.size(); ++k) {
         taken.push_back(formats_.front());
         formats_.pop_front();
@@ -109,6 +118,12 @@ private:
     for (std::size_t k = 0; k < ready.size(); ++k)
       out.append(resultOf(*ready[k], taken[k]));
     return out;
+  }
+
+  void takeIn(const FrameFormat& format)
+  {
+    formats_.push_back(format);
+    ++pushed_;
   }
 
   Stream stream_;

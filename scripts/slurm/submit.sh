@@ -88,6 +88,7 @@ if [[ ${1:-} == --rerun ]]; then
   [[ -f $record_file ]] || { echo "$0: '$record_file' not found: not the log directory of a submission" >&2; exit 2; }
   # shellcheck source=/dev/null
   source "$record_file"
+  shards=$((10#$shards)) # decimal, also in a record written with the count as it was given
   todo=$(unfinished_shards)
   if [[ -z $todo ]]; then
     echo "range_nlm: every one of the $shards shards has finished; nothing to re-run"
@@ -106,10 +107,13 @@ fi
 in_dir=$1 out_dir=$2 shards=$3
 shift 3
 tool_options=("$@")
-[[ $shards =~ ^[0-9]+$ ]] && ((shards >= 1)) || { echo "$0: N must be a number of shards >= 1, got '$shards'" >&2; exit 2; }
+# Numbers are decimal, leading zeros or not (010 is 10, as range_nlm_denoise --shard reads it; bash
+# arithmetic would read it as octal 8).
+decimal() { [[ $1 =~ ^[0-9]{1,9}$ ]] && echo $((10#$1)); }
+given=$shards
+shards=$(decimal "$given") && ((shards >= 1)) || { echo "$0: N must be a number of shards >= 1, got '$given'" >&2; exit 2; }
 [[ -d $in_dir ]] || { echo "$0: input directory '$in_dir' does not exist" >&2; exit 2; }
-cpus=${RANGE_NLM_CPUS:-2}
-[[ $cpus =~ ^[0-9]+$ ]] && ((cpus >= 1)) || { echo "$0: RANGE_NLM_CPUS must be >= 1, got '$cpus'" >&2; exit 2; }
+cpus=$(decimal "${RANGE_NLM_CPUS:-2}") && ((cpus >= 1)) || { echo "$0: RANGE_NLM_CPUS must be >= 1, got '${RANGE_NLM_CPUS:-}'" >&2; exit 2; }
 tool=${RANGE_NLM_DENOISE:-$(command -v range_nlm_denoise || echo "$here/../../build/tools/range_nlm_denoise")}
 [[ -x $tool ]] || { echo "$0: range_nlm_denoise not found at '$tool' (set RANGE_NLM_DENOISE)" >&2; exit 2; }
 tool=$(realpath "$tool")
@@ -120,7 +124,11 @@ log_dir=${RANGE_NLM_LOG_DIR:-$out_dir.logs}
 mkdir -p "$log_dir"
 log_dir=$(realpath "$log_dir")
 read -r -a sbatch_options <<<"${RANGE_NLM_SBATCH_OPTIONS:-}"
-array_limit=${RANGE_NLM_ARRAY_LIMIT:-}
+array_limit=
+if [[ -n ${RANGE_NLM_ARRAY_LIMIT:-} ]]; then
+  array_limit=$(decimal "$RANGE_NLM_ARRAY_LIMIT") && ((array_limit >= 1)) ||
+    { echo "$0: RANGE_NLM_ARRAY_LIMIT must be >= 1, got '$RANGE_NLM_ARRAY_LIMIT'" >&2; exit 2; }
+fi
 
 array_job=$(submit_shards "0-$((shards - 1))")
 check_job=$(submit_check "$array_job" "$array_job")

@@ -234,6 +234,17 @@ detail::FrameContext::FrameContext(const std::vector<const Grid*>& frames_, int 
 {
 }
 
+void
+checkViewpoint(const Viewpoint& viewpoint, const std::string& what)
+{
+  if (std::isfinite(viewpoint[0]) && std::isfinite(viewpoint[1]) && std::isfinite(viewpoint[2]))
+    return;
+  std::ostringstream msg;
+  msg << "range_nlm: " << what << " must be finite, got (" << viewpoint[0] << ", " << viewpoint[1] << ", "
+      << viewpoint[2] << ")";
+  throw std::invalid_argument(msg.str());
+}
+
 FilterRun
 runFilter(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
           const Viewpoint& viewpoint, const std::vector<unsigned char>& active)
@@ -254,6 +265,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   }
   // Checked before anything runs with parameters.threads threads (OpenMP crashes on absurd counts).
   parameters.validate();
+  checkViewpoint(viewpoint, "the viewpoint (sensor origin)");
   std::vector<const Grid*> frames = given;
   workspace.run.outliers_moved = 0; // every path below keeps it
   workspace.prior_sigma.clear();

@@ -2,7 +2,8 @@
 // brought up on 127.0.0.1 with every file in a temporary directory, scripts/slurm/submit.sh
 // filters a recording as a job array of shards plus a check job, one shard is cancelled, the
 // check job fails naming what is missing, submit.sh --rerun submits that shard again, and the
-// outputs must be byte-identical to one run on this machine. Skipped, saying so, where slurm-wlm and munge are
+// outputs must be byte-identical to one run on this machine; numbers with leading zeros are
+// decimal. Skipped, saying so, where slurm-wlm and munge are
 // not installed (scripts/setup.sh installs them).
 #include "test_support.h"
 
@@ -415,4 +416,65 @@ TEST_F(SlurmClusterTest, JobArrayOfShardsWritesWhatOneMachineWrites)
   EXPECT_EQ(missing.status, 1) << missing.output;
   EXPECT_NE(missing.output.find("1 missing\n  missing: " + frameName(29)), std::string::npos) << missing.output;
   EXPECT_NE(missing.output.find("temporary files left by interrupted tasks: 1"), std::string::npos) << missing.output;
+}
+
+TEST_F(SlurmClusterTest, NumbersWithLeadingZerosAreDecimal)
+{
+  // N = 010 is ten shards (range_nlm_denoise --shard K/010 reads shard K of 10): an array of
+  // eight tasks would leave shards 8 and 9 unfiltered, with nothing for --rerun to re-run.
+  constexpr int kFrames = 12;
+  const fs::path in = dir_ / "recording";
+  fs::create_directories(in);
+  for (int k = 0; k < kFrames; ++k)
+    pcl::io::savePCDFileBinary((in / frameName(k)).string(),
+                               test::makeCloud(20, 15, test::step(8, 1.0, 1.3), 0.005, 11 + k));
+  std::unique_ptr<SlurmCluster> cluster;
+  try {
+    cluster = std::make_unique<SlurmCluster>(dir_ / "cluster");
+  } catch (const std::exception& e) {
+    FAIL() << "the one-node Slurm cluster did not come up: " << e.what();
+  }
+  const fs::path out = dir_ / "sharded";
+  const fs::path logs = dir_ / "sharded.logs";
+  const std::string submit = "bash " + (kScripts / "submit.sh").string();
+  const test::CommandResult submitted =
+      test::runCommand("RANGE_NLM_CPUS=01 RANGE_NLM_ARRAY_LIMIT=02 RANGE_NLM_DENOISE=" + kTool + " " + submit + " " +
+                       in.string() + " " + out.string() + " 010 --search-window 3 --patch 3 --normal-window 3");
+  ASSERT_EQ(submitted.status, 0) << submitted.output << cluster->logs();
+  std::smatch ids;
+  ASSERT_TRUE(std::regex_search(submitted.output, ids, std::regex("array job ([0-9]+) .*check job ([0-9]+)")))
+      << submitted.output;
+  EXPECT_NE(submitted.output.find("(10 shards, 1 CPUs each)"), std::string::npos) << submitted.output;
+  const std::string array_job = ids[1], check_job = ids[2];
+  ASSERT_TRUE(waitForJobs(180, logs)) << test::runCommand("squeue").output << failedTask(logs) << cluster->logs();
+  for (int k = 0; k < 10; ++k) {
+    const std::string task =
+        test::readBytes((logs / ("range_nlm-" + array_job + "_" + std::to_string(k) + ".out")).string());
+    EXPECT_NE(task.find("shard " + std::to_string(k) + "/10, 1 thread(s)"), std::string::npos) << k << ": " << task;
+    EXPECT_NE(task.find("exit_status=0"), std::string::npos) << k << ": " << task;
+  }
+  const std::string check = test::readBytes((logs / ("range_nlm-check-" + check_job + ".out")).string());
+  EXPECT_NE(check.find("12 input frames in " + in.string() + ", 12 outputs in " + out.string() + ", 0 missing"),
+            std::string::npos)
+      << check;
+  EXPECT_NE(check.find("shards: 10 task logs, 10 shards done; failed: none; not finished: none"), std::string::npos)
+      << check;
+  EXPECT_NE(
+      test::runCommand(submit + " --rerun " + logs.string()).output.find("every one of the 10 shards has finished"),
+      std::string::npos);
+
+  // 08 is 8, not an octal error (the input directory is checked after N); a number that is not
+  // one is refused naming it.
+  const test::CommandResult eight =
+      test::runCommand("RANGE_NLM_DENOISE=" + kTool + " " + submit + " " + (dir_ / "none").string() + " " +
+                       (dir_ / "eight").string() + " 08");
+  EXPECT_EQ(eight.status, 2) << eight.output;
+  EXPECT_NE(eight.output.find("input directory '" + (dir_ / "none").string() + "' does not exist"), std::string::npos)
+      << eight.output;
+  for (const std::string& variable : {"RANGE_NLM_CPUS", "RANGE_NLM_ARRAY_LIMIT"}) {
+    const test::CommandResult refused = test::runCommand(variable + "=0x2 RANGE_NLM_DENOISE=" + kTool + " " + submit +
+                                                         " " + in.string() + " " + (dir_ / "bad").string() + " 2");
+    EXPECT_EQ(refused.status, 2) << refused.output;
+    EXPECT_NE(refused.output.find(variable + " must be >= 1, got '0x2'"), std::string::npos) << refused.output;
+  }
 }

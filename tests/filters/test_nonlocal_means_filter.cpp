@@ -11,6 +11,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <utility>
 
 using namespace range_nlm;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
@@ -421,6 +423,22 @@ TEST(NonLocalMeansFilter, BadInputGivesClearErrors)
   (*inf_cloud)[5].z = INFINITY;
   f.setInputCloud(inf_cloud);
   EXPECT_NE(test::errorOf([&] { f.filter(out); }).find("infinite coordinate at pixel (5, 0)"), std::string::npos);
+
+  // Ranges are measured from the viewpoint: a non-finite one is refused, naming it and its value,
+  // and the output is left as it was.
+  for (const auto& [bad, text] :
+       {std::pair<float, std::string>{INFINITY, "inf"}, {-INFINITY, "-inf"}, {std::nanf(""), "nan"}}) {
+    Cloud::Ptr far(new Cloud(*cloud));
+    far->sensor_origin_[1] = bad;
+    f.setInputCloud(far);
+    Cloud kept;
+    kept.push_back(pcl::PointXYZ(1, 2, 3));
+    const std::string error = test::errorOf([&] { f.filter(kept); });
+    EXPECT_NE(error.find("the viewpoint (sensor origin) must be finite, got (0, " + text + ", 0)"), std::string::npos)
+        << error;
+    ASSERT_EQ(kept.size(), 1u);
+    EXPECT_EQ(kept[0].z, 3.0f);
+  }
 }
 
 // Every instantiated point type: same geometry as PointXYZ, every other field untouched.

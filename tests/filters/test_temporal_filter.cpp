@@ -300,6 +300,33 @@ TEST(TemporalFilter, MismatchedFrameSizesAreRejected)
   EXPECT_THROW(TemporalStream<pcl::PointXYZ>(-1, false, FilterParameters()), std::invalid_argument);
 }
 
+TEST(TemporalFilter, ANonFiniteViewpointIsRefusedAndTheStreamGoesOn)
+{
+  const auto frames = sequence(3, 0, 0.003, 70);
+  Cloud::Ptr far(new Cloud(*frames[1]));
+  far->sensor_origin_[0] = INFINITY;
+  TemporalStream<pcl::PointXYZ> stream(0, false, FilterParameters::recommended());
+  ASSERT_EQ(stream.push(frames[0]).size(), 1u);
+  // Refused before the stream changes, naming the frame, the viewpoint and its value; the frame
+  // can be skipped.
+  try {
+    stream.push(far);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the viewpoint (sensor origin) of frame 1 must be finite, got (inf, 0, 0)"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(stream.heldFrames(), 0u);
+  EXPECT_EQ(stream.push(frames[2]).size(), 1u);
+  // The filter on a window refuses it too (runFilter checks the viewpoint of every run).
+  TemporalNonLocalMeansFilter<pcl::PointXYZ> t;
+  t.setFrames({frames[0], far, frames[2]}, 1);
+  Cloud out;
+  EXPECT_NE(test::errorOf([&] { t.filter(out); }).find("the viewpoint (sensor origin) must be finite, got (inf, 0, 0)"),
+            std::string::npos);
+}
+
 TEST(TemporalFilter, StreamPassesAnAllNanFrameThroughAndGoesOn)
 {
   const FilterParameters p = FilterParameters::recommended();

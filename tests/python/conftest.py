@@ -5,7 +5,10 @@ built tools.
 """
 
 import os
+import signal
 import subprocess
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -63,3 +66,29 @@ def plane(width=64, height=48, depth=1.5, noise=0.003, seed=3, dtype=np.float32)
     z = depth + noise * rng.standard_normal((height, width))
     points = np.stack([(u - width / 2) * z / 60.0, (v - height / 2) * z / 60.0, z], axis=-1)
     return np.ascontiguousarray(points, dtype=dtype)
+
+
+def seconds_to_interrupt(call, after):
+    """Runs call() with SIGINT sent to this process `after` seconds in (Python's handler raising
+    KeyboardInterrupt installed meanwhile, as in an interactive session); returns the seconds
+    until KeyboardInterrupt came out of the call, or None if it returned first. A signal that
+    arrives only after the call is caught here too, so that it cannot end the test session."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(after, os.kill, (os.getpid(), signal.SIGINT))
+    elapsed = None
+    try:
+        start = time.perf_counter()
+        timer.start()
+        try:
+            call()
+        except KeyboardInterrupt:
+            elapsed = time.perf_counter() - start
+        try:
+            timer.join()
+            time.sleep(0.05)  # a signal sent at the end is handled here
+        except KeyboardInterrupt:
+            pass
+    finally:
+        timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+    return elapsed

@@ -1,5 +1,7 @@
 """Files through range_nlm::io: PCD frames, depth PNGs, intrinsics; errors name the file."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -67,3 +69,60 @@ def test_prefer_huge_pages_sets_up_the_heap_and_changes_no_result():
     assert setup["heap_below_bytes"] == 32 << 20
     assert setup["marked_bytes"] >= 0
     assert np.array_equal(bits(range_nlm.denoise(points)), bits(before))
+
+
+def _path_calls(folder):
+    """Every function of the module that takes a path: name -> call(path), each on a file of its
+    own under `folder` (the readers' files exist, so that only the path can be at fault)."""
+    points = plane(width=8, height=6)
+    depth = np.full((6, 8), 5000, dtype=np.uint16)
+    range_nlm.write_pcd(str(folder / "in.pcd"), points)
+    range_nlm.write_depth_png(str(folder / "in.png"), depth)
+    (folder / "intrinsics.txt").write_text("fx 525\nfy 525\ncx 319.5\ncy 239.5\n")
+    return {
+        "read_pcd": (lambda p: range_nlm.read_pcd(p), "in.pcd"),
+        "write_pcd": (lambda p: range_nlm.write_pcd(p, points), "out.pcd"),
+        "read_depth_png": (lambda p: range_nlm.read_depth_png(p), "in.png"),
+        "write_depth_png": (lambda p: range_nlm.write_depth_png(p, depth), "out.png"),
+        "read_intrinsics": (lambda p: range_nlm.read_intrinsics(p), "intrinsics.txt"),
+        "render_before_after": (lambda p: range_nlm.render_before_after(points, points, p), "render.png"),
+    }
+
+
+@pytest.mark.parametrize("name", ["read_pcd", "write_pcd", "read_depth_png", "write_depth_png", "read_intrinsics",
+                                  "render_before_after"])
+def test_every_path_argument_takes_str_bytes_and_path_like(tmp_path, name):
+    call, file_name = _path_calls(tmp_path)[name]
+    for path in (str(tmp_path / file_name), tmp_path / file_name, os.fsencode(tmp_path / file_name)):
+        call(path)
+        assert (tmp_path / file_name).exists()
+    with pytest.raises(TypeError, match="path must be a str, bytes or os.PathLike path, got int"):
+        call(3)
+
+
+@pytest.mark.parametrize("name", ["read_pcd", "write_pcd", "read_depth_png", "write_depth_png", "read_intrinsics",
+                                  "render_before_after"])
+def test_a_path_with_an_embedded_null_byte_is_refused_as_open_refuses_it(tmp_path, name):
+    call, file_name = _path_calls(tmp_path)[name]
+    # The part before the NUL names an existing file (readers) or a writable one (writers): cut
+    # there, the call would go through on another file than the one named.
+    before = sorted(os.listdir(tmp_path))
+    for path in (str(tmp_path / file_name) + "\0/../x", tmp_path / (file_name + "\0x"),
+                 os.fsencode(tmp_path / file_name) + b"\0x"):
+        with pytest.raises(ValueError, match="path has an embedded null byte"):
+            call(path)
+    with pytest.raises(ValueError, match="embedded null byte"):
+        open(str(tmp_path / file_name) + "\0/../x", "rb")
+    assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_a_bytes_path_need_not_be_utf8_and_errors_still_name_it(tmp_path):
+    points = plane(width=8, height=6)
+    path = os.fsencode(tmp_path) + b"/\xff.pcd"
+    range_nlm.write_pcd(path, points)
+    assert os.listdir(os.fsencode(tmp_path)) == [b"\xff.pcd"]
+    assert np.array_equal(bits(range_nlm.read_pcd(path)), bits(points))
+    with pytest.raises(range_nlm.InputError, match=r"\\xffmissing.pcd'"):
+        range_nlm.read_pcd(os.fsencode(tmp_path) + b"/\xffmissing.pcd")
+    with pytest.raises(ValueError, match=r"\\xffmissing.png'"):
+        range_nlm.read_depth_png(os.fsencode(tmp_path) + b"/\xffmissing.png")

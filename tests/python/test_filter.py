@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import range_nlm
-from conftest import SMALL, SMALL_CLI, bits, plane, run_tool
+from conftest import SMALL, SMALL_CLI, bits, plane, run_tool, seconds_to_interrupt
 
 
 def test_denoise_is_bit_identical_to_the_cli(scene, tmp_path):
@@ -132,6 +132,20 @@ def test_infinite_coordinate_is_refused_naming_the_pixel():
         range_nlm.denoise(points)
 
 
+@pytest.mark.parametrize("bad, text", [(np.inf, "inf"), (-np.inf, "-inf"), (np.nan, "nan")])
+def test_non_finite_viewpoint_is_refused_naming_it_and_its_value(tmp_path, bad, text):
+    # Ranges are measured from the viewpoint: a non-finite one would leave nothing to filter.
+    points = plane(width=20, height=10)
+    message = r"viewpoint must be finite, got \(%s, 0, 0\)" % text
+    with pytest.raises(ValueError, match=message):
+        range_nlm.denoise(points, viewpoint=(bad, 0, 0))
+    # write_pcd refuses what read_pcd would refuse.
+    with pytest.raises(ValueError, match=message):
+        range_nlm.write_pcd(str(tmp_path / "far.pcd"), points, viewpoint=(bad, 0, 0))
+    assert not (tmp_path / "far.pcd").exists()
+    assert range_nlm.denoise(points, viewpoint=(0.5, 0, -1), **SMALL).shape == points.shape
+
+
 def test_depth_errors_name_the_problem():
     with pytest.raises(TypeError, match="uint16, float32 or float64"):
         range_nlm.denoise_depth(np.ones((8, 8), np.int32))
@@ -160,6 +174,20 @@ def test_gil_is_released_while_a_frame_is_filtered():
     gaps = np.diff(stamps)
     assert len(stamps) > 10
     assert gaps.max() < 0.5 * call, "this thread stood still for %.3f s of a %.3f s call" % (gaps.max(), call)
+
+
+def test_ctrl_c_stops_a_long_call_soon_and_the_module_goes_on():
+    # The filter checks for signals between its stages: KeyboardInterrupt comes well before the
+    # call would have ended (measured here, on this machine), and the next call is unaffected.
+    points = plane(width=1200, height=900)
+    expected = range_nlm.denoise(points)
+    start = time.perf_counter()  # a second call, as the interrupted one, reuses the buffers
+    range_nlm.denoise(points)
+    whole = time.perf_counter() - start
+    stopped = seconds_to_interrupt(lambda: range_nlm.denoise(points), 0.2 * whole)
+    assert stopped is not None, "the call of %.2f s ended before the signal" % whole
+    assert stopped < 0.6 * whole, "KeyboardInterrupt after %.2f s of a %.2f s call" % (stopped, whole)
+    assert np.array_equal(bits(range_nlm.denoise(points)), bits(expected))
 
 
 def _rss_kb():

@@ -1,12 +1,13 @@
 """Stream: the temporal filter frame by frame, bit-identical to range_nlm_denoise --input-dir."""
 
 import os
+import time
 
 import numpy as np
 import pytest
 
 import range_nlm
-from conftest import SMALL, SMALL_CLI, bits, run_tool
+from conftest import SMALL, SMALL_CLI, bits, plane, run_tool, seconds_to_interrupt
 
 
 def _cli_run(scene, tmp_path, *options):
@@ -87,3 +88,38 @@ def test_stream_arguments_are_checked():
         range_nlm.Stream(-1)
     with pytest.raises(TypeError, match="unexpected keyword argument 'windw'"):
         range_nlm.Stream(1, windw=3)
+
+
+def test_ctrl_c_stops_a_push_soon_and_the_stream_goes_on():
+    # An interrupted push keeps its frame: its result comes with the next push (or finish()),
+    # the same as without the interruption.
+    frames = [plane(width=900, height=675, seed=k) for k in range(2)]
+    reference = range_nlm.Stream(0)
+    start = time.perf_counter()
+    expected = reference.push(frames[0])
+    whole = time.perf_counter() - start
+    expected += reference.push(frames[1])
+    stream = range_nlm.Stream(0)
+    stopped = seconds_to_interrupt(lambda: stream.push(frames[0]), 0.2 * whole)
+    assert stopped is not None, "the push of %.2f s ended before the signal" % whole
+    assert stopped < 0.6 * whole, "KeyboardInterrupt after %.2f s of a %.2f s push" % (stopped, whole)
+    out = stream.push(frames[1])
+    assert len(out) == 2 and len(stream.info) == 2
+    for a, b in zip(out, expected):
+        assert np.array_equal(bits(a), bits(b))
+    assert stream.finish() == []
+
+
+def test_ctrl_c_stops_a_finish_which_can_be_called_again():
+    frames = [plane(width=900, height=675, seed=k) for k in range(2)]
+    reference = range_nlm.Stream(1)
+    expected = reference.push(frames[0]) + reference.push(frames[1])
+    start = time.perf_counter()
+    expected += reference.finish()
+    whole = time.perf_counter() - start
+    stream = range_nlm.Stream(1)
+    assert len(stream.push(frames[0]) + stream.push(frames[1])) == 1
+    stopped = seconds_to_interrupt(stream.finish, 0.2 * whole)
+    assert stopped is not None and stopped < 0.6 * whole
+    out = stream.finish()
+    assert len(out) == 1 and np.array_equal(bits(out[0]), bits(expected[1]))

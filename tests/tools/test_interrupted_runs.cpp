@@ -221,6 +221,35 @@ TEST_F(InterruptedRuns, SigintLeavesOnlyCompleteOutputsAndResumeFinishesTheRun)
   resume(out, "", written);
 }
 
+TEST_F(InterruptedRuns, SigintDuringOneLargeFrameEndsTheRunWithoutWaitingForTheFrame)
+{
+  // One large frame (a few seconds): SIGINT ends the run at once, and its output, written to a
+  // temporary name first, never appears under its final name.
+  const int w = test::kAddressSanitizer ? 400 : 1600, h = test::kAddressSanitizer ? 300 : 1200;
+  const fs::path in = root_ / "one-large-frame";
+  fs::create_directories(in);
+  pcl::io::savePCDFileBinary((in / frameName(0)).string(),
+                             test::makeCloud(w, h, test::step(w / 3, 1.0, 1.3), 0.004, 7));
+  const auto start = std::chrono::steady_clock::now();
+  const Result whole_run = runTool("--input-dir " + in.string() + " --output-dir " + (root_ / "one-whole").string());
+  ASSERT_EQ(whole_run.status, 0) << whole_run.output;
+  const auto whole = std::chrono::steady_clock::now() - start;
+  const fs::path out = root_ / "one-interrupted";
+  const auto started = std::chrono::steady_clock::now();
+  const pid_t pid =
+      startTool({"--input-dir", in.string(), "--output-dir", out.string()}, (root_ / "one-log.txt").string());
+  std::this_thread::sleep_for(whole / 4);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const auto stopped = std::chrono::steady_clock::now() - started;
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << readBytes(root_ / "one-log.txt");
+  EXPECT_LT(stopped, whole * 6 / 10) << "SIGINT at a quarter of the frame ended the run after "
+                                     << std::chrono::duration<double>(stopped).count() << " s of "
+                                     << std::chrono::duration<double>(whole).count() << " s";
+  EXPECT_TRUE(!fs::exists(out) || finalFiles(out).empty());
+}
+
 TEST_F(InterruptedRuns, SigkillDuringTemporalRunThenResumeIsByteIdentical)
 {
   const fs::path out = root_ / "sigkill";

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace range_nlm
@@ -26,6 +27,13 @@ struct UnfilterableFrame : std::invalid_argument
 
 /// Sensor position the normals are oriented toward, in cloud coordinates.
 using Viewpoint = std::array<float, 3>;
+
+/// Throws std::invalid_argument ("range_nlm: <what> must be finite, got (inf, 0, 0)") unless
+/// every coordinate of `viewpoint` is finite: ranges are measured from it, and a non-finite one
+/// leaves no range to filter (the PCD reader refuses a non-finite VIEWPOINT for the same reason).
+/// runFilter and TemporalStream::push check theirs with it.
+void
+checkViewpoint(const Viewpoint& viewpoint, const std::string& what);
 
 /// Least-squares plane normals over a `window` x `window` grid neighbourhood (PCL's
 /// solvePlaneParameters on the neighbourhood covariance), oriented toward `viewpoint`.

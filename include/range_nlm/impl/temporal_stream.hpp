@@ -157,6 +157,8 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
                                     " has an infinite coordinate at pixel (" + std::to_string(i % frame->width) +
                                     ", " + std::to_string(i / frame->width) + "); invalid points must be NaN");
     }
+    checkViewpoint({frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]},
+                   "the viewpoint (sensor origin) of frame " + std::to_string(pushed_));
     if (width_ == 0 && height_ == 0) {
       width_ = frame->width;
       height_ = frame->height;
