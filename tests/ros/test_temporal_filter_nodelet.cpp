@@ -142,10 +142,11 @@ frame(int k, int w = 64, int h = 48)
   return cloud;
 }
 
+/// The node's default preset (live) with windows small enough for the test frames.
 FilterParameters
 testParameters()
 {
-  FilterParameters p = FilterParameters::recommended();
+  FilterParameters p = FilterParameters::live();
   p.search_window = 7;
   p.patch_size = 3;
   return p;
@@ -160,6 +161,7 @@ nodeExecutable()
 TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
 {
   ros::param::set("/rnlm_points/temporal_radius", 1);
+  ros::param::set("/rnlm_points/recursive", false); // the live preset's default window is recursive
   ros::param::set("/rnlm_points/search_window", 7);
   ros::param::set("/rnlm_points/patch", 3);
   ChildProcess node({nodeExecutable(), "__name:=rnlm_points", "~input:=/rnlm/in", "~output:=/rnlm/out"},
@@ -227,7 +229,7 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
   EXPECT_TRUE(node.running()) << readLog(node.log());
   EXPECT_EQ(output.pending(), 0u);
   // The start-up log states the whole setting, the given parameters marked.
-  EXPECT_NE(log.find("preset 'default', temporal radius 1 (set), causal window, points move along the line of "
+  EXPECT_NE(log.find("preset 'live', temporal radius 1 (set), causal window, points move along the line of "
                      "sight (automatic)"),
             std::string::npos)
       << log;
@@ -237,6 +239,7 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
 TEST(RosNode, TheUncertaintyImageIsPublishedWhenEnabledWithTheInputHeader)
 {
   ros::param::set("/rnlm_sigma/temporal_radius", 1);
+  ros::param::set("/rnlm_sigma/recursive", false);
   ros::param::set("/rnlm_sigma/search_window", 7);
   ros::param::set("/rnlm_sigma/patch", 3);
   ros::param::set("/rnlm_sigma/uncertainty", true);
@@ -328,6 +331,7 @@ TEST(RosNode, CentredWindowDelaysOutputByTheRadius)
 {
   ros::param::set("/rnlm_centred/temporal_radius", 1);
   ros::param::set("/rnlm_centred/causal", false);
+  ros::param::set("/rnlm_centred/recursive", false);
   ros::param::set("/rnlm_centred/search_window", 7);
   ros::param::set("/rnlm_centred/patch", 3);
   // The options added to the tool are parameters too: a dilation of 2 changes every output.
@@ -408,7 +412,7 @@ rosRefusal(const std::string& ns)
 
 TEST(RosParameters, EveryRegistryParameterReachesTheFilterParameters)
 {
-  const FilterParameters base = FilterParameters::recommended();
+  const FilterParameters base = FilterParameters::live(); // the node's default preset
   for (const ParameterEntry& entry : parameterRegistry()) {
     const std::string ns = std::string("/rnlm_registry_") + entry.name;
     if (entry.ros_name) {
@@ -434,6 +438,32 @@ TEST(RosParameters, EveryRegistryParameterReachesTheFilterParameters)
       ros::param::del(key);
     }
   }
+}
+
+// Without ~preset a node runs the live preset, one frame of history in the recursive window; the
+// accuracy setting for recorded data filters each frame alone unless told otherwise.
+TEST(RosParameters, ANodeDefaultsToTheLivePresetInTheRecursiveWindow)
+{
+  const range_nlm_ros::StreamSettings live =
+      range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live"));
+  EXPECT_TRUE(test::sameOtherFields(*findParameter("threads"), live.parameters, FilterParameters::live()));
+  EXPECT_EQ(live.temporal_radius, 1);
+  EXPECT_EQ(live.window, TemporalWindow::recursive);
+  EXPECT_EQ(range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live")).preset, "live");
+
+  ros::param::set("/rnlm_defaults_default/preset", std::string("default"));
+  const range_nlm_ros::StreamSettings recorded =
+      range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default"));
+  EXPECT_TRUE(test::sameOtherFields(*findParameter("threads"), recorded.parameters, FilterParameters::recommended()));
+  EXPECT_EQ(recorded.temporal_radius, 0);
+  ros::param::set("/rnlm_defaults_default/temporal_radius", 1);
+  EXPECT_EQ(range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default")).window,
+            TemporalWindow::causal);
+  ros::param::set("/rnlm_defaults_live/recursive", false);
+  EXPECT_EQ(range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live")).window,
+            TemporalWindow::causal);
+  ros::param::del("/rnlm_defaults_default");
+  ros::param::del("/rnlm_defaults_live");
 }
 
 TEST(RosParameters, FractionalValuesAreReadAsDoublesAndIntegersAsIntegers)
@@ -576,6 +606,7 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   ::setenv("AMENT_PREFIX_PATH", RANGE_NLM_ROS_DEVEL_PREFIX, 1); // where pluginlib finds the plugin
   ros::param::set("/rnlm_depth/input", std::string("depth"));
   ros::param::set("/rnlm_depth/temporal_radius", 1);
+  ros::param::set("/rnlm_depth/recursive", false);
   ros::param::set("/rnlm_depth/search_window", 7);
   ros::param::set("/rnlm_depth/patch", 3);
   std::vector<std::string> manager_command = {RANGE_NLM_NODELET_EXECUTABLE, "manager", "__name:=rnlm_manager"};
@@ -730,6 +761,7 @@ TEST(RosNode, TwoInstancesInOneNamespaceSubscribeOnlyWhileTheirOutputIsWanted)
   for (const char* name : {"/twins/twin_a", "/twins/twin_b"}) {
     ros::param::set(std::string(name) + "/search_window", 7);
     ros::param::set(std::string(name) + "/patch", 3);
+    ros::param::set(std::string(name) + "/temporal_radius", 0); // each frame alone
   }
   ros::param::set("/twins/twin_b/outlier_sigmas", 2.5);
   ChildProcess a({nodeExecutable(), "__ns:=/twins", "__name:=twin_a"}, g_master->directory() + "/twin_a.log");
@@ -778,6 +810,7 @@ TEST(RosNode, ReconfiguringABandwidthBetweenTwoFramesChangesTheOutputAndDiagnost
 {
   ros::param::set("/rnlm_live/search_window", 7);
   ros::param::set("/rnlm_live/patch", 3);
+  ros::param::set("/rnlm_live/temporal_radius", 0);
   ChildProcess node({nodeExecutable(), "__name:=rnlm_live"}, g_master->directory() + "/rnlm_live.log");
   ros::NodeHandle nh;
   ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/rnlm_live/input", 10);
@@ -900,12 +933,13 @@ TEST(RosLaunch, TheLaunchFileStartsTheNodeWithPrivateParametersAndTheCameraTopic
   EXPECT_EQ(sigmas, 2.5);
   EXPECT_FALSE(ros::param::has("/range_nlm/outlier_sigmas")); // nothing outside the node's namespace
 
-  // The launch file's live default: radius 1, causal, along the line of sight.
+  // The launch file's default for a live camera: the live preset, radius 1 in the recursive window,
+  // along the line of sight.
   FilterParameters p = testParameters();
   p.outlier_sigmas = 2.5f;
   p.displacement = Displacement::line_of_sight;
-  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::causal, p);
-  for (int k = 0; k < 2; ++k) {
+  TemporalStream<pcl::PointXYZ> expected(1, TemporalWindow::recursive, p);
+  for (int k = 0; k < 3; ++k) {
     const Cloud::Ptr cloud = frame(30 + k);
     input.publish(toPointCloud2(*cloud, 70 + k, 0));
     const auto out = output.next();
