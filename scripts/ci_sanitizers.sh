@@ -59,7 +59,9 @@ for k in 0 1 2; do
 done
 for mode in "" "--temporal-radius 1"; do
   # shellcheck disable=SC2086
-  valgrind --quiet --leak-check=full --errors-for-leak-kinds=definite,indirect \
+  # OMP_WAIT_POLICY set: the tool does not restart itself for its directory run (it would leave
+  # valgrind behind).
+  OMP_WAIT_POLICY=passive valgrind --quiet --leak-check=full --errors-for-leak-kinds=definite,indirect \
     --show-leak-kinds=definite,indirect --error-exitcode=3 \
     build/tools/range_nlm_denoise --input-dir "$seq_dir/in" --output-dir "$seq_dir/out" \
     --search-window 5 --patch 3 --normal-window 3 --threads 2 --quiet $mode

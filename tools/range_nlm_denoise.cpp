@@ -666,6 +666,8 @@ run(int argc, char** argv)
   po::variables_map vm;
   if (!parseOptions(argc, argv, vm))
     return 0;
+  if (vm.count("input-dir") || wantsBagJob(vm))
+    waitPassivelyBetweenFrames(argv);
   if (wantsBagJob(vm))
     return runBagJob(vm);
   const Job job = jobFrom(vm);

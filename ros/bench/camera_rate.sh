@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The camera-rate benchmark of the ROS nodelet: a real master, a nodelet manager with
 # range_nlm/TemporalFilterNodelet loaded, and a VGA bag (the frames of data/kinect-sequence,
-# looped) replayed at 30 Hz, each message stamped when it is sent. Prints, per mode (static
-# default, causal radius 1, recursive radius 1, static with queue_size 1): output rate, latency
+# looped) replayed at 30 Hz, each message stamped when it is sent. Prints, per mode (the live
+# preset static, recursive radius 1 with queue_size 2 and 1, the default static): output rate, latency
 # from stamp to receipt (median, 95th percentile), frames dropped and how old the previous
 # output's frame is.
 #
@@ -39,6 +39,13 @@ trap cleanup EXIT
 port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI=http://127.0.0.1:$port ROS_IP=127.0.0.1 ROS_HOSTNAME=127.0.0.1
 export ROS_HOME=$work ROS_LOG_DIR=$work/log AMENT_PREFIX_PATH=$devel
+# Every process of the graph on glibc's huge pages for its frame buffers, as the launch file sets
+# up the processes it starts (RANGE_NLM_HUGE_PAGES=0: without).
+if [[ ${RANGE_NLM_HUGE_PAGES:-1} != 0 ]]; then
+  export GLIBC_TUNABLES=glibc.malloc.hugetlb=1
+fi
+# The filter's OpenMP threads sleep between frames, as the launch file sets it up.
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 unset ROS_NAMESPACE
 rosmaster --core -p "$port" >"$work/master.log" 2>&1 &
 pids+=($!)
@@ -64,8 +71,10 @@ run_mode() {
   kill -INT "$loader" 2>/dev/null || true
   wait "$loader" 2>/dev/null || true
 }
-run_mode static _temporal_radius:=0
-run_mode causal _temporal_radius:=1 _causal:=true
-run_mode recursive _temporal_radius:=1 _recursive:=true
-# The same static default with a queue of one frame: the newest frame only, the lowest latency.
-run_mode static_queue1 _temporal_radius:=0 _queue_size:=1
+# The node's default, the live preset: each frame alone, then its stream default (recursive,
+# radius 1), then the same with a queue of one frame (the newest frame only, the lowest latency).
+run_mode live_static _temporal_radius:=0
+run_mode live_recursive
+run_mode live_recursive_queue1 _queue_size:=1
+# The accuracy setting for recorded data, for comparison.
+run_mode default_static _preset:=default _temporal_radius:=0

@@ -347,6 +347,27 @@ TEST(NonLocalMeansFilter, ThreadCountDoesNotChangeOutput)
   }
 }
 
+// The live preset runs the default's kernels with one pass: the windowed evaluation equals the
+// direct one on an odd-sized frame with holes, a depth step and its borders, and the thread count
+// does not change a bit.
+TEST(NonLocalMeansFilter, TheLivePresetMatchesTheDirectEvaluationAndTheThreadCountDoesNotMatter)
+{
+  Cloud in = test::makeCloud(71, 53, test::step(37, 1.0, 1.06), 0.004, 31);
+  test::punchHoles(in, 0.08, 32);
+  FilterParameters p = FilterParameters::live();
+  p.threads = 2;
+  const Cloud fast = filtered(in, p);
+  p.evaluation = Evaluation::direct;
+  const Cloud direct = filtered(in, p);
+  EXPECT_LT(maxDistance(fast, direct), 2e-5);
+  EXPECT_GT(maxDistance(fast, in), 1e-3); // it filtered
+  p.evaluation = Evaluation::fast;
+  for (int threads : {1, 3}) {
+    p.threads = threads;
+    EXPECT_EQ(maxDistance(filtered(in, p), fast), 0.0) << threads << " threads";
+  }
+}
+
 TEST(NonLocalMeansFilter, KeepsHeaderPoseAndSizes)
 {
   Cloud in = noisyPlane(0.004, 14);

@@ -25,6 +25,10 @@ def test_defaults_are_the_clis_and_the_paper_preset_is_the_papers():
     paper = range_nlm.Parameters.paper()
     assert (paper.search_window, paper.patch_size, paper.iterations) == (7, 5, 1)
     assert paper.bandwidth_model == "global" and paper.displacement == "normal"
+    live = range_nlm.Parameters.live()
+    assert live == range_nlm.Parameters.preset("live")
+    assert (live.search_window, live.patch_size, live.iterations, live.reuse_estimates) == (9, 3, 1, True)
+    assert not p.reuse_estimates
 
 
 def test_command_line_names_are_accepted_too():

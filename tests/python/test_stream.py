@@ -123,3 +123,17 @@ def test_ctrl_c_stops_a_finish_which_can_be_called_again():
     assert stopped is not None and stopped < 0.6 * whole
     out = stream.finish()
     assert len(out) == 1 and np.array_equal(bits(out[0]), bits(expected[1]))
+
+
+def test_a_live_stream_is_recursive_and_bit_identical_to_the_cli(scene, frames, tmp_path):
+    expected = _cli_run(scene, tmp_path, "--preset", "live", "--temporal-radius", "1", "--recursive")
+    stream = range_nlm.Stream(radius=1, parameters="live", **SMALL)
+    assert stream.mode == "recursive"
+    results = list(stream.filter(frames))
+    assert len(results) == len(frames) == len(expected)
+    for got, want in zip(results, expected):
+        assert np.array_equal(bits(got), bits(want))
+    # The same frames with the default preset give other bytes: the preset reached the filter.
+    default = list(range_nlm.Stream(radius=1, mode="recursive", **SMALL).filter(frames))
+    assert not all(np.array_equal(bits(a), bits(b)) for a, b in zip(results, default))
+    assert range_nlm.Stream(radius=1, **SMALL).mode == "centred"

@@ -178,6 +178,19 @@ printable(const std::string& text)
   return out;
 }
 
+void
+waitPassivelyBetweenFrames(char** argv)
+{
+  if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT"))
+    return; // the user's (or the calling tool's) choice
+  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0)
+    return;
+  std::cout.flush();
+  std::cerr.flush();
+  ::execv("/proc/self/exe", argv);
+  ::unsetenv("OMP_WAIT_POLICY"); // exec failed: run on as started
+}
+
 int
 runTool(const std::string& tool, const std::function<int()>& body)
 {

@@ -56,6 +56,15 @@ struct LockConflict : InputError
 int
 runTool(const std::string& tool, const std::function<int()>& body);
 
+/// For runs over many frames (a directory, a bag): restarts the process (exec of itself, same
+/// arguments and process id) with OMP_WAIT_POLICY=passive unless the environment already sets
+/// OMP_WAIT_POLICY or GOMP_SPINCOUNT. libgomp's threads otherwise spin between parallel regions
+/// and after each frame, taking the cores from the threads that read and write the frames beside
+/// the filter (docs/performance.md, "Whole-process time over a directory"); libgomp reads the
+/// policy only when it is loaded, hence the restart. Returns (doing nothing) where exec fails.
+void
+waitPassivelyBetweenFrames(char** argv);
+
 /// `text` with its control characters written as escapes (\n, \t, \r, \xHH): a file name may
 /// hold any byte but '/' and NUL, and printed raw it could split a one-line message or drive the
 /// terminal. For every file name and message a tool prints as text (JSON escapes its own).
