@@ -21,7 +21,7 @@
 # Prints the two job ids ("array job A, check job C") and where the logs are.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-# shellcheck source=output_file.sh
+# shellcheck source-path=SCRIPTDIR source=output_file.sh
 source "$here/output_file.sh"
 usage() {
   echo "usage: $0 IN_DIR OUT_DIR N [range_nlm_denoise options]" >&2
