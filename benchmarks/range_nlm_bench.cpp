@@ -11,6 +11,7 @@
 #include "temporal_comparison.h"
 #include "uncertainty_calibration.h"
 #include "cli/cli.h"
+#include "io/output_file.h"
 
 #include <range_nlm/core/pipeline.h>
 #include <range_nlm/grid_adaptor.h>
@@ -33,7 +34,6 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -1192,6 +1192,20 @@ generalisationOptions(const po::variables_map& vm)
   return g;
 }
 
+/// Refuses a --json-file that cannot be written (a directory, a socket, a missing or read-only
+/// directory, ...) without creating it; the file is written whole at the end, through OutputFile
+/// like every output (a temporary file renamed into place, links followed, a device or FIFO
+/// written directly).
+void
+checkJsonFile(const std::string& path)
+{
+  try {
+    io::detail::OutputFile::check(path);
+  } catch (const io::InputError& e) {
+    throw UsageError(std::string("--json-file ") + e.what());
+  }
+}
+
 /// --quality or --temporal-comparison: accuracy instead of timing.
 void
 runComparison(const po::variables_map& vm)
@@ -1200,6 +1214,8 @@ runComparison(const po::variables_map& vm)
   std::ostringstream sink;
   std::ostream& log = vm.count("quiet") ? static_cast<std::ostream&>(sink) : std::cerr;
   std::ostringstream report, json_text;
+  if (vm.count("json-file"))
+    checkJsonFile(vm["json-file"].as<std::string>()); // now rather than after a long run
   if (vm.count("hole-filling")) {
     holes::Options o;
     o.threads = vm["threads"].as<int>();
@@ -1289,12 +1305,8 @@ runComparison(const po::variables_map& vm)
       temporal::printTable(rows, real, t, report);
   }
   std::cout << report.str();
-  if (vm.count("json-file")) {
-    std::ofstream file(vm["json-file"].as<std::string>());
-    file << json_text.str();
-    if (!file)
-      throw InputError("cannot write '" + vm["json-file"].as<std::string>() + "'");
-  }
+  if (vm.count("json-file"))
+    io::detail::writeWholeFile(vm["json-file"].as<std::string>(), json_text.str());
 }
 
 /// The timing run's settings from the command line, each checked.
@@ -1336,9 +1348,7 @@ settingsFrom(const po::variables_map& vm)
   s.json = vm.count("json") > 0;
   if (vm.count("json-file")) {
     s.json_file = vm["json-file"].as<std::string>();
-    // Fail now rather than after a long run.
-    if (!std::ofstream(s.json_file, std::ios::app))
-      throw UsageError("--json-file '" + s.json_file + "': cannot open the file for writing");
+    checkJsonFile(s.json_file); // now rather than after a long run
   }
   s.quiet = vm.count("quiet") > 0;
   if (s.config != "all" && s.config != "static" && s.config != "temporal" && s.config != "preset")
@@ -1444,10 +1454,9 @@ runTiming(const Settings& s)
   info.load_end = bench::loadAverage();
   info.wall_s = millisecondsSince(start) / 1e3;
   if (!s.json_file.empty()) {
-    std::ofstream file(s.json_file);
-    printJson(file, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
-    if (!file)
-      throw InputError("--json-file '" + s.json_file + "': cannot write the file");
+    std::ostringstream text;
+    printJson(text, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);
+    io::detail::writeWholeFile(s.json_file, text.str());
   }
   if (s.json)
     printJson(std::cout, s, info, sources, baseline_mb, rows, breakdowns, sequence.get(), targets);

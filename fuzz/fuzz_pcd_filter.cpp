@@ -27,6 +27,7 @@
 // holds the parameters; tests/test_bad_input.cpp filters every tests/data/fuzz-*.pcd that way and
 // runs range_nlm_denoise on every tests/data/fuzz-* file.
 #include "fuzz_contract.h"
+#include "io/output_file.h"
 #include <range_nlm/io/pcd_file.h>
 
 #include <range_nlm/nonlocal_means_filter.h>
@@ -131,14 +132,18 @@ pointValue(FuzzedDataProvider& in, float ordinary)
   }
 }
 
-/// Writes a decoded recipe as an ascii PCD with its parameters in a comment line.
+/// Writes a decoded recipe as an ascii PCD with its parameters in a comment line (PCL's ascii
+/// writer into a scratch file, then the whole file through OutputFile, as every output).
 void
 writeRecipe(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud,
             const range_nlm::FilterParameters& p)
 {
-  pcl::PCDWriter().writeASCII(path, cloud, 9);
-  std::ifstream in(path);
+  const std::string scratch = temporaryPath() + ".recipe";
+  pcl::PCDWriter().writeASCII(scratch, cloud, 9);
+  std::ifstream in(scratch);
   std::string text((std::istreambuf_iterator<char>(in)), {});
+  in.close();
+  std::remove(scratch.c_str());
   std::ostringstream line;
   line.precision(9);
   line << "# range_nlm recipe search_window=" << p.search_window << " patch_size=" << p.patch_size
@@ -148,7 +153,7 @@ writeRecipe(const std::string& path, const pcl::PointCloud<pcl::PointXYZ>& cloud
        << " displacement=" << (p.displacement == range_nlm::Displacement::normal ? "normal" : "line_of_sight")
        << " seed=" << p.seed << " distance_bandwidth=" << p.distance_bandwidth
        << " similarity_bandwidth=" << p.similarity_bandwidth << "\n";
-  std::ofstream(path, std::ios::trunc) << line.str() << text;
+  range_nlm::io::detail::writeWholeFile(path, line.str() + text);
 }
 
 void

@@ -2,16 +2,25 @@
 
 #include <range_nlm/ros/message_frames.h>
 
+#include "io/output_file.h"
+
+#include <range_nlm/io/pcd_file.h>
+
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 #include <ros/message_traits.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include <cerrno>
+#include <cstdlib>
 #include <deque>
 #include <filesystem>
 #include <memory>
+#include <vector>
 
+#include <fcntl.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 namespace range_nlm_ros
@@ -20,6 +29,7 @@ namespace
 {
 
 namespace fs = std::filesystem;
+namespace io = range_nlm::io;
 
 std::string
 quoted(const std::string& s)
@@ -59,21 +69,81 @@ public:
                        c->datatype + " messages, not sensor_msgs/PointCloud2");
     const std::size_t total = topic_view.size();
 
-    const fs::path target(options_.output_bag);
-    const fs::path tmp =
-        target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+    // The output: refused now if it cannot be written (a directory, a socket, ...), before any
+    // message is filtered.
     try {
-      out_.open(tmp.string(), rosbag::bagmode::Write);
-    } catch (const rosbag::BagException& e) {
-      throw BagError("cannot write bag " + quoted(options_.output_bag) + ": " + e.what());
+      io::detail::OutputFile output(options_.output_bag);
+      filterInto(in, output, total, progress);
+    } catch (const io::InputError& e) {
+      throw BagError(e.what());
     }
+  }
+
+private:
+  /// A file in the temporary directory for a bag bound for a device or a FIFO; the destructor
+  /// removes it.
+  struct ScratchFile
+  {
+    std::string path;
+    ScratchFile() = default;
+    ScratchFile(const ScratchFile&) = delete;
+    ScratchFile& operator=(const ScratchFile&) = delete;
+    ~ScratchFile()
+    {
+      if (!path.empty())
+        ::unlink(path.c_str());
+    }
+    void create(io::detail::OutputFile& output)
+    {
+      std::string name = (fs::temp_directory_path() / "range_nlm_bag_XXXXXX").string();
+      const int fd = ::mkstemp(name.data());
+      if (fd < 0)
+        output.fail("cannot create a scratch file for the bag in '" + fs::temp_directory_path().string() + "'", errno);
+      ::close(fd);
+      path = name;
+    }
+    /// Copies the scratch file's bytes into `output` (a write error is reported by commit()).
+    void copyTo(io::detail::OutputFile& output) const
+    {
+      const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd < 0)
+        output.fail("cannot read the bag's scratch file '" + path + "'", errno);
+      std::vector<char> buffer(1 << 20);
+      for (;;) {
+        const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+        if (n < 0 && errno == EINTR)
+          continue;
+        if (n < 0) {
+          const int error = errno;
+          ::close(fd);
+          output.fail("cannot read the bag's scratch file '" + path + "'", error);
+        }
+        if (n == 0 || output.tryWrite(buffer.data(), static_cast<std::size_t>(n)) != 0)
+          break;
+      }
+      ::close(fd);
+    }
+  };
+
+  /// Filters `in` into `output`. rosbag writes by file name and seeks back while writing, so it
+  /// writes the output's temporary file, which commit() moves into place; for a device or a FIFO
+  /// it writes a scratch file whose bytes are then copied into the device or FIFO.
+  void filterInto(rosbag::Bag& in, io::detail::OutputFile& output, std::size_t total,
+                  const std::function<void(std::size_t, std::size_t)>& progress)
+  {
+    ScratchFile scratch;
+    if (output.direct())
+      scratch.create(output);
+    const std::string file = output.direct() ? scratch.path : output.temporaryPath();
+    out_ = std::make_unique<rosbag::Bag>();
     try {
+      out_->open(file, rosbag::bagmode::Write);
       stream_ = std::make_unique<TaggedStream<Pending>>(options_.settings);
       rosbag::View all(in);
       std::size_t done = 0;
       for (const rosbag::MessageInstance& m : all) {
         if (m.getTopic() != options_.topic) {
-          out_.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+          out_->write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
           ++report_.copied;
           continue;
         }
@@ -82,31 +152,61 @@ public:
           progress(++done, total);
       }
       write(stream_->flush());
-      out_.close();
+      out_->close();
+      out_.reset();
     } catch (const rosbag::BagException& e) {
-      discard(tmp);
-      throw BagError("bag " + quoted(options_.input_bag) + " -> " + quoted(options_.output_bag) + ": " + e.what());
+      const int reason = ioErrorOf(errno, file); // before abandon() frees the space
+      abandon(file, std::string(e.what()).rfind("Error closing file", 0) == 0);
+      const std::string what =
+          output.direct() ? "cannot write the bag's scratch file '" + file + "'" : std::string("cannot write the bag");
+      if (reason != 0)
+        output.fail(what, reason);
+      output.fail(what + " (" + e.what() + ")", EIO);
     } catch (...) {
-      discard(tmp);
+      abandon(file, false);
       throw;
     }
-    std::error_code ec;
-    fs::rename(tmp, target, ec);
-    if (ec) {
-      fs::remove(tmp, ec);
-      throw BagError("cannot move bag " + quoted(options_.output_bag) + " into place: " + ec.message());
-    }
+    if (output.direct())
+      scratch.copyTo(output);
+    output.commit();
   }
 
-private:
-  void discard(const fs::path& tmp)
+  /// Ends the output bag after a failure. rosbag::Bag's destructor closes the bag, which writes
+  /// its index and throws if that fails; thrown from a destructor, that would end the process. So
+  /// the space the partial bag takes is freed (it is discarded anyway) and the bag closed here,
+  /// where an exception can be caught. After a failed fclose (`closing`) the C library has
+  /// released the stream already and closing again would release it twice: then, as when closing
+  /// fails once more, the rosbag::Bag is left allocated and never destroyed.
+  void abandon(const std::string& file, bool closing) noexcept
   {
-    try {
-      out_.close();
-    } catch (...) {
+    if (!out_)
+      return;
+    if (!closing) {
+      const int ignored = ::truncate(file.c_str(), 0); // removed by the caller either way
+      (void)ignored;
+      try {
+        out_->close();
+        out_.reset();
+        return;
+      } catch (...) {
+      }
     }
-    std::error_code ec;
-    fs::remove(tmp, ec);
+    (void)out_.release();
+  }
+
+  /// The system's reason for a failed write of the bag `file`: `error` (errno just after
+  /// rosbag's failure) if it is an error of writing, else ENOSPC if the file system has no space
+  /// left, else 0.
+  static int ioErrorOf(int error, const std::string& file)
+  {
+    for (int e : {ENOSPC, EDQUOT, EIO, EFBIG, EROFS})
+      if (error == e)
+        return error;
+    struct statvfs disk;
+    const std::string directory = fs::path(file).parent_path().string();
+    if (::statvfs(directory.empty() ? "." : directory.c_str(), &disk) == 0 && disk.f_bavail == 0)
+      return ENOSPC;
+    return 0;
   }
 
   void filterMessage(const rosbag::MessageInstance& m)
@@ -139,7 +239,7 @@ private:
     report_.invalid.emplace_back(name, why);
     // Copied unchanged; frames still in the window come out after it, in their own time order
     // in the bag's index.
-    out_.write(options_.topic, m.getTime(), *message, m.getConnectionHeader());
+    out_->write(options_.topic, m.getTime(), *message, m.getConnectionHeader());
   }
 
   void write(const std::vector<TaggedStream<Pending>::Output>& ready)
@@ -150,16 +250,16 @@ private:
       frame.milliseconds = out.milliseconds;
       frame.unfiltered = out.problem;
       if (!out.problem.empty()) {
-        out_.write(options_.topic, p.time, *p.message, p.connection_header);
+        out_->write(options_.topic, p.time, *p.message, p.connection_header);
         continue;
       }
-      out_.write(options_.topic, p.time, *pointCloud2WithXyz(*p.message, *out.cloud), p.connection_header);
+      out_->write(options_.topic, p.time, *pointCloud2WithXyz(*p.message, *out.cloud), p.connection_header);
     }
   }
 
   const BagFilterOptions& options_;
   BagFilterReport& report_;
-  rosbag::Bag out_;
+  std::unique_ptr<rosbag::Bag> out_;
   std::unique_ptr<TaggedStream<Pending>> stream_;
 };
 

@@ -21,6 +21,8 @@
 # Prints the two job ids ("array job A, check job C") and where the logs are.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+# shellcheck source-path=SCRIPTDIR source=output_file.sh
+source "$here/output_file.sh"
 usage() {
   echo "usage: $0 IN_DIR OUT_DIR N [range_nlm_denoise options]" >&2
   echo "       $0 --rerun LOG_DIR" >&2
@@ -54,7 +56,8 @@ quote() {
   done
 }
 
-# Writes the settings of the submission (array jobs `$1`), to be sourced by --rerun.
+# Writes the settings of the submission (array jobs `$1`), to be sourced by --rerun (through
+# write_output: never half-written, a link followed, a directory refused).
 record() {
   {
     echo "# range_nlm sharded run, submitted $(date -u +%Y-%m-%dT%H:%M:%SZ) by:"
@@ -68,7 +71,7 @@ record() {
     printf ' )\ntool_options=('
     quote "${tool_options[@]}"
     printf ' )\n'
-  } >"$log_dir/range_nlm-submission.sh"
+  } | write_output "$log_dir/range_nlm-submission.sh"
 }
 
 # The shards 0 .. N-1 without a task log that ends in exit_status=0, comma-separated.

@@ -63,8 +63,15 @@ followLinks(const std::string& path, int& error)
 }
 } // namespace
 
-OutputFile::OutputFile(const std::string& path) : path_(path)
+OutputFile::OutputFile(const std::string& path) : OutputFile(path, true) {}
+
+OutputFile::OutputFile(const std::string& path, bool open) : path_(path)
 {
+  if (path.empty())
+    throw InputError("the output path is empty; give a file name");
+  if (path.back() == '/')
+    throw InputError("'" + path + "': ends with '/', so it names a directory; refusing to write there (give a file "
+                     "name)");
   int error = 0;
   target_ = followLinks(path, error);
   if (error != 0)
@@ -74,11 +81,17 @@ OutputFile::OutputFile(const std::string& path) : path_(path)
   if (!exists && errno != ENOENT)
     fail("cannot examine the output path", errno);
   if (exists && (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode))) {
+    const std::string kind = S_ISCHR(st.st_mode) ? "device" : "FIFO";
+    if (!open) {
+      if (::access(target_.c_str(), W_OK) != 0)
+        fail("cannot open the " + kind + " for writing", errno);
+      return;
+    }
     do
       fd_ = ::open(target_.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY);
     while (fd_ < 0 && errno == EINTR);
     if (fd_ < 0)
-      fail(std::string("cannot open the ") + (S_ISCHR(st.st_mode) ? "device" : "FIFO") + " for writing", errno);
+      fail("cannot open the " + kind + " for writing", errno);
     return;
   }
   if (exists && !S_ISREG(st.st_mode))
@@ -87,6 +100,12 @@ OutputFile::OutputFile(const std::string& path) : path_(path)
                      "; refusing to write over it (give a regular file, a character device such as /dev/null, or a "
                      "FIFO)");
   const fs::path target(target_);
+  if (!open) {
+    const fs::path directory = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    if (::access(directory.c_str(), W_OK | X_OK) != 0)
+      fail("cannot create the output file", errno);
+    return;
+  }
   temporary_ =
       (target.parent_path() / (temporaryPrefix(target.filename().string()) + std::to_string(::getpid()))).string();
   fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
@@ -95,6 +114,12 @@ OutputFile::OutputFile(const std::string& path) : path_(path)
     temporary_.clear(); // nothing to remove
     fail("cannot create the output file", e);
   }
+}
+
+void
+OutputFile::check(const std::string& path)
+{
+  const OutputFile probe(path, false);
 }
 
 OutputFile::~OutputFile()
@@ -172,6 +197,14 @@ OutputFile::commit()
   if (!direct() && ::rename(temporary_.c_str(), target_.c_str()) != 0)
     fail("cannot move the output file into place", errno);
   committed_ = true;
+}
+
+void
+writeWholeFile(const std::string& path, const std::string& bytes)
+{
+  OutputFile out(path);
+  out.write(bytes.data(), bytes.size());
+  out.commit();
 }
 
 } // namespace detail

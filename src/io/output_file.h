@@ -21,7 +21,7 @@ namespace detail
 ///    final target written as above; the link stays a link;
 ///  - a character device (e.g. /dev/null) or a FIFO: opened and written directly, no temporary
 ///    file, no rename (a FIFO blocks until a reader opens it, as a shell redirection would);
-///  - anything else (directory, block device, socket): refused.
+///  - anything else (directory, block device, socket), or a path ending in '/': refused.
 /// Every error throws io::InputError whose message names `path` and says what went wrong
 /// (with strerror, e.g. "No space left on device").
 class OutputFile
@@ -40,14 +40,28 @@ public:
   /// Flushes to the device (regular files: fsync), closes and renames into place. Throws on
   /// failure (and removes the temporary file).
   void commit();
+  /// Removes the temporary file (closing the output) and throws io::InputError naming the path:
+  /// "'PATH': WHAT: strerror(error)", with the disk-full note for ENOSPC and EDQUOT.
+  [[noreturn]] void fail(const std::string& what, int error);
+
+  /// Checks `path` as the constructor does (links followed; a directory, block device, socket or
+  /// a path ending in '/' refused; for a new or regular file, its directory must exist and be
+  /// writable) without creating or opening anything: for a writer that refuses an output before
+  /// long work and opens it at the end. Throws io::InputError naming the path.
+  static void check(const std::string& path);
 
   /// The path as given (for messages).
   const std::string& path() const { return path_; }
   /// True if the output is written directly (character device or FIFO).
   bool direct() const { return temporary_.empty(); }
+  /// The temporary file (empty when direct()), for a library that writes a file by name with its
+  /// own I/O (rosbag): it writes and closes that file, commit() fsyncs and renames it into place,
+  /// and it is removed like any temporary file if commit() is not reached.
+  const std::string& temporaryPath() const { return temporary_; }
 
 private:
-  [[noreturn]] void fail(const std::string& what, int error);
+  /// Resolves and checks `path`; opens the output only if `open`.
+  OutputFile(const std::string& path, bool open);
   void discard() noexcept;
 
   std::string path_;      // as given
@@ -57,6 +71,10 @@ private:
   int error_ = 0; // first failure of tryWrite
   bool committed_ = false;
 };
+
+/// Writes `bytes` to `path` through an OutputFile (the whole file, committed).
+void
+writeWholeFile(const std::string& path, const std::string& bytes);
 
 } // namespace detail
 } // namespace io

@@ -1,6 +1,7 @@
 #include "cli/frame_output.h"
 
 #include "cli/cli.h"
+#include "io/output_file.h"
 
 #include <pcl/conversions.h>
 
@@ -8,13 +9,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
-
-#include <unistd.h>
 
 namespace po = boost::program_options;
 
@@ -115,29 +112,14 @@ writeFloatImage(const std::string& path, const std::vector<float>& values, int w
     std::copy_n(&values[static_cast<std::size_t>(height - 1 - v) * width], width,
                 &rows[static_cast<std::size_t>(v) * width]);
   static_assert(sizeof(float) == 4, "PFM holds 32-bit floats");
-  // A temporary file beside it, renamed into place once complete: no half-written image ever
-  // carries the final name.
-  const std::filesystem::path target(path);
-  const std::filesystem::path temporary =
-      target.parent_path() / (io::temporaryPrefix(target.filename().string()) + std::to_string(::getpid()));
-  {
-    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-    file.write(header.data(), static_cast<std::streamsize>(header.size()));
-    // Little-endian hosts, as the scale -1.0 says.
-    file.write(reinterpret_cast<const char*>(rows.data()), static_cast<std::streamsize>(rows.size() * sizeof(float)));
-    file.close();
-    if (!file) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw InputError("cannot write the uncertainty image '" + path + "'");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, target, error);
-  if (error) {
-    std::filesystem::remove(temporary, error);
-    throw InputError("cannot write the uncertainty image '" + path + "': " + error.message());
-  }
+  // Through OutputFile, like every output: a temporary file beside it renamed into place once
+  // complete (no half-written image ever carries the final name), links followed, devices and
+  // FIFOs written directly, directories refused; errors name the file.
+  io::detail::OutputFile file(path);
+  file.write(header.data(), header.size());
+  // Little-endian hosts, as the scale -1.0 says.
+  file.write(rows.data(), rows.size() * sizeof(float));
+  file.commit();
 }
 
 void

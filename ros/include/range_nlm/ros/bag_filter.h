@@ -56,8 +56,14 @@ struct BagFilterReport
 /// Reads `input_bag` in time order and writes `output_bag`: the messages of `topic` filtered
 /// (static or temporal as `settings` say, frames in the bag's order, a new temporal window when
 /// the frame size changes), every other message byte for byte, all with their record times and
-/// connection headers. The output is written under a temporary name and renamed into place at
-/// the end, so no half-written bag ever carries its name. Throws BagError if a bag cannot be
+/// connection headers. The output follows the rules of every range_nlm writer: a regular file is
+/// written under a temporary name beside it and renamed into place at the end (so no
+/// half-written bag ever carries its name, and none is left on failure); a symbolic link is
+/// followed (its target written, the link stays); a character device or a FIFO gets the bag's
+/// bytes (written to a scratch file in the temporary directory first, then copied); a directory,
+/// a socket, a block device, a path ending in '/' or the input bag itself is refused before any
+/// message is filtered. A full disk gives a BagError naming the output bag and saying so.
+/// Throws BagError if a bag cannot be
 /// read or written, the topic has no message or holds another type than sensor_msgs/PointCloud2,
 /// or (without keep_going) one of its messages is not an organized cloud. `progress`, if given,
 /// is called after each message of the topic with the count done and the total.
