@@ -1259,7 +1259,7 @@ runComparison(const po::variables_map& vm)
   } else if (vm.count("uncertainty-calibration")) {
     uncertainty_calibration::Options u;
     u.threads = vm["threads"].as<int>();
-    u.seed = vm["seed"].as<std::uint64_t>();
+    u.seed = vm["seed"].as<Unsigned64>().value;
     const auto [w, h] = qualitySize(vm);
     u.width = w, u.height = h;
     u.plot = vm["uncertainty-plot"].as<std::string>();
@@ -1344,7 +1344,7 @@ settingsFrom(const po::variables_map& vm)
   s.sequence_search = vm["sequence-search"].as<int>();
   s.sequence_patch = vm["sequence-patch"].as<int>();
   s.mls_radius = vm["mls-radius"].as<double>();
-  s.seed = vm["seed"].as<std::uint64_t>();
+  s.seed = vm["seed"].as<Unsigned64>().value;
   s.json = vm.count("json") > 0;
   if (vm.count("json-file")) {
     s.json_file = vm["json-file"].as<std::string>();
@@ -1505,7 +1505,7 @@ run(int argc, char** argv)
     ("sequence-patch", po::value<int>()->default_value(kTemporalPatch), "patch size P of the --sequence-memory run")
     ("mls-radius", po::value<double>()->default_value(0.0),
      "MovingLeastSquares search radius in cloud units; 0 = the radius of a disc with the 7x7 window's area at the frame's median pixel spacing")
-    ("seed", po::value<std::uint64_t>()->default_value(1), "seed of the fresh noise of generated frames")
+    ("seed", unsigned64Value(1), "seed of the fresh noise of generated frames")
     ("json", "print one JSON object instead of the table")
     ("json-file", po::value<std::string>(), "also write that JSON object to this file")
     ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")

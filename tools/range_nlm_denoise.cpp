@@ -125,25 +125,43 @@ addOptions(po::options_description& options)
   addMemoryLimitOption(options);
 }
 
-/// Bytes a width x height frame of `point_step`-byte points needs in a run of `passes`: per pass,
-/// the filter's buffers (about 106 bytes a pixel) and 2R + 1 frames in flight, each held as the
-/// loaded points, a PointXYZ cloud and the filter's grid (point_step + 44 bytes a pixel).
-/// Measured with /usr/bin/time -v on 640 x 480 frames of 16-byte points: 166 bytes a pixel
-/// above the tool's baseline for one static pass, 282 with --temporal-radius 1. A directory run
-/// (`overlapped`) also holds the frame read ahead and the one written behind, each as its loaded
-/// points and a PointXYZ cloud (point_step + 16 bytes a pixel; measured: 47 bytes a pixel more
-/// than one frame at a time, static or temporal).
+/// Bytes a width x height frame of `point_step`-byte points needs in a run of `passes`, above the
+/// tool's own (about 40 MB). Per pass and pixel: the filter's buffers, 150 bytes (with the phases
+/// of a dilation, automatic or given; contiguous windows alone take about 10 % less, one dilated
+/// iteration alone less than half); 2R + 1 frames in flight, each held as the loaded points, a
+/// PointXYZ cloud, the filter's grid and its per-frame buffers (point_step + 68 bytes); with
+/// scales > 1 the pyramid and the levels' buffers (72 + 24 R bytes); with the uncertainty the
+/// sums of the weights (90 bytes); with the hole filling the frame as given and the fill's buffers
+/// (40 bytes); and 48 bytes a bandwidth sample. A directory run (`overlapped`) also holds the
+/// frame read ahead and the one written behind, each as its loaded points and a PointXYZ cloud
+/// (point_step + 16 bytes a pixel). Measured as the peak resident set (/usr/bin/time -v) less a
+/// 32 x 24 frame's, on 1280 x 960 active-stereo frames of 16-byte points (bytes a pixel, measured
+/// and estimated): one frame 205 / 234, --scales 3 271 / 306, --uncertainty 290 / 324,
+/// --fill-holes 64 240 / 274, all three 386 / 434; a directory 256 / 298, --temporal-radius 1
+/// 375 / 466 (all three 576 / 692), 2 544 / 634 (all three 765 / 884), 4 763 / 970.
 std::uint64_t
 frameMemory(const std::vector<Pass>& passes, bool overlapped, std::uint64_t width, std::uint64_t height,
             std::uint64_t point_step)
 {
-  std::uint64_t per_pixel = 0;
-  for (const Pass& pass : passes)
-    per_pixel += 106 + (2 * std::uint64_t(pass.radius) + 1) * (point_step + 44);
+  std::uint64_t per_pixel = 0, fixed = 0;
+  for (const Pass& pass : passes) {
+    const FilterParameters& p = pass.parameters;
+    const std::uint64_t radius = std::uint64_t(pass.radius);
+    per_pixel += 150 + (2 * radius + 1) * (point_step + 68);
+    if (p.scales > 1)
+      per_pixel += 72 + 24 * radius;
+    if (p.uncertainty)
+      per_pixel += 90;
+    if (p.fill_holes > 0)
+      per_pixel += 40;
+    fixed += 48 * std::uint64_t(std::max(p.bandwidth_samples, 0));
+  }
   if (overlapped)
     per_pixel += 2 * (point_step + 16);
   const std::uint64_t pixels = width * height;
-  return pixels > UINT64_MAX / per_pixel ? UINT64_MAX : pixels * per_pixel;
+  if (pixels > (UINT64_MAX - fixed) / per_pixel)
+    return UINT64_MAX;
+  return pixels * per_pixel + fixed;
 }
 
 /// The passes of the schedule: --pass specs over the filter options, or those options alone.

@@ -90,7 +90,7 @@ addOptions(po::options_description& options, const SceneOptions& d)
     ("motion", po::value<std::string>()->default_value(toString(d.motion)),
      "static, or moving: the near box translates along +x by --motion-step per frame")
     ("motion-step", po::value<double>()->default_value(d.motion_step), "translation of the moving box per frame, m")
-    ("seed", po::value<std::uint64_t>()->default_value(d.seed), "seed of the noise, dropouts and stripe phases")
+    ("seed", unsigned64Value(d.seed), "seed of the noise, dropouts and stripe phases")
     ("quiet,q", "print nothing but errors");
   // clang-format on
 }
@@ -141,7 +141,7 @@ sceneOptionsFrom(const po::variables_map& vm)
   o.dropout = vm["dropout"].as<double>();
   o.grazing_dropout = vm["grazing-dropout"].as<double>();
   o.motion_step = vm["motion-step"].as<double>();
-  o.seed = vm["seed"].as<std::uint64_t>();
+  o.seed = vm["seed"].as<Unsigned64>().value;
   try {
     o.validate();
   } catch (const std::invalid_argument& e) {

@@ -25,8 +25,10 @@ using ParameterField =
                  CrossFrameBandwidth FilterParameters::*, Displacement FilterParameters::*>;
 
 /// Valid values of a numeric field: v == 0 where `zero_allowed`; otherwise min <= v (min < v
-/// with `min_exclusive`) and v <= max, and odd with `odd`. Floating-point values must also be
-/// finite. Without a `requirement` every value is valid.
+/// with `min_exclusive`) and v <= max, and odd with `odd`; the bounds are compared as the field's
+/// type holds them. Floating-point values must also be finite. Every numeric field has a finite
+/// min and max (without them one option can take the machine's memory or time, or overflow the
+/// float arithmetic), with `why` they are where they are.
 struct ParameterRange
 {
   double min = -std::numeric_limits<double>::infinity();
@@ -36,6 +38,8 @@ struct ParameterRange
   bool zero_allowed = false;
   /// What a valid value is, as validate()'s message ends: "must be ...".
   const char* requirement = nullptr;
+  /// Why the bounds are where they are: what a value beyond them would cost or break.
+  const char* why = nullptr;
 };
 
 /// A name without a value of its own that sets an enumerated field: a command-line flag, or a

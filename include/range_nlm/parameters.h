@@ -137,7 +137,10 @@ struct FilterParameters
   float similarity_scale = 3.0f;
   /// Seed of the random sample used to estimate the bandwidths. Same seed, same output.
   std::uint64_t seed = 42;
-  /// Number of random valid points sampled for the bandwidth estimate. >= 1, default 1000.
+  /// Largest accepted `bandwidth_samples` (the parameter registry says why).
+  static constexpr int max_bandwidth_samples = 100000;
+  /// Number of random valid points sampled for the bandwidth estimate (drawn with replacement).
+  /// 1 ... max_bandwidth_samples (100000), default 1000.
   int bandwidth_samples = 1000;
   /// Side of the grid neighbourhood of the least-squares plane fit that gives the normals,
   /// pixels. Odd, >= 3. Default 7 (paper: 3, the one-ring).

@@ -1,16 +1,21 @@
 #include <range_nlm/ros/message_frames.h>
 
 #include <range_nlm/io/depth_image.h>
+#include <range_nlm/io/pcd_file.h>
 #include <range_nlm/io/ray_reprojection.h>
+#include <range_nlm/parameter_registry.h>
 
 #include <sensor_msgs/image_encodings.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace range_nlm_ros
 {
@@ -79,6 +84,14 @@ writeCoordinate(std::uint8_t* point, const Coordinate& c, float value)
   }
 }
 
+/// The smallest side of a frame any parameters can filter: the smallest normal window.
+int
+smallestWindow()
+{
+  const range_nlm::ParameterEntry* normal = range_nlm::findParameter("normal_window");
+  return normal ? static_cast<int>(normal->range.min) : 3;
+}
+
 struct CloudLayout
 {
   Coordinate x, y, z;
@@ -92,6 +105,13 @@ checkedLayout(const sensor_msgs::PointCloud2& message)
                          "); the filter needs an organized cloud (height > 1, one point per pixel)");
   if (message.width == 0)
     throw InvalidMessage("PointCloud2 is empty (" + sizeText(message.width, message.height) + ")");
+  // Before a byte of it is decoded: no parameters filter a frame narrower or lower than the
+  // smallest plane fit (a caller that knows its parameters checks their windows too).
+  const int smallest = smallestWindow();
+  if (message.width < std::uint32_t(smallest) || message.height < std::uint32_t(smallest))
+    throw InvalidMessage("PointCloud2 of " + sizeText(message.width, message.height) +
+                         " is smaller than the filter's smallest window (" + std::to_string(smallest) + " x " +
+                         std::to_string(smallest) + " points for a normal)");
   if (bool(message.is_bigendian) != kHostBigEndian)
     throw InvalidMessage(std::string("PointCloud2 is ") + (message.is_bigendian ? "big" : "little") +
                          "-endian, unlike this host");
@@ -101,6 +121,17 @@ checkedLayout(const sensor_msgs::PointCloud2& message)
   if (std::uint64_t(message.data.size()) != std::uint64_t(message.row_step) * message.height)
     throw InvalidMessage("PointCloud2 data holds " + std::to_string(message.data.size()) + " bytes, not row_step " +
                          std::to_string(message.row_step) + " x height " + std::to_string(message.height));
+  // The PCD reader's check: which of two x fields would be the coordinate?
+  std::vector<std::string> names;
+  std::vector<std::uint64_t> counts;
+  for (const sensor_msgs::PointField& field : message.fields) {
+    names.push_back(field.name);
+    counts.push_back(field.count);
+  }
+  const std::string problem =
+      range_nlm::io::fieldLayoutProblem(names, counts, std::max<std::uint32_t>(1, message.point_step));
+  if (!problem.empty())
+    throw InvalidMessage("PointCloud2 " + problem);
   return CloudLayout{coordinateField(message, "x"), coordinateField(message, "y"), coordinateField(message, "z")};
 }
 
@@ -136,9 +167,17 @@ checkImage(const sensor_msgs::Image& image)
 } // namespace
 
 Cloud::Ptr
-cloudFromPointCloud2(const sensor_msgs::PointCloud2& message)
+cloudFromPointCloud2(const sensor_msgs::PointCloud2& message, const range_nlm::FilterParameters* parameters)
 {
   const CloudLayout layout = checkedLayout(message);
+  if (parameters) {
+    try {
+      parameters->validateFor(static_cast<int>(std::min<std::uint32_t>(message.width, INT32_MAX)),
+                              static_cast<int>(std::min<std::uint32_t>(message.height, INT32_MAX)));
+    } catch (const std::invalid_argument& e) {
+      throw InvalidMessage("PointCloud2 of " + sizeText(message.width, message.height) + ": " + e.what());
+    }
+  }
   Cloud::Ptr cloud(new Cloud(message.width, message.height));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const double largest = std::numeric_limits<float>::max();

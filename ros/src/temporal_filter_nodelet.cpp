@@ -158,7 +158,8 @@ TemporalFilterNodelet::onPointCloud(const sensor_msgs::PointCloud2::ConstPtr& me
   statistics_.received();
   std::vector<CloudStream::Output> ready;
   try {
-    const Cloud::Ptr cloud = cloudFromPointCloud2(*message);
+    // A cloud too small for the windows is refused before it is decoded.
+    const Cloud::Ptr cloud = cloudFromPointCloud2(*message, &cloud_stream_->parameters());
     if (!hasValidPoint(*cloud))
       throw InvalidMessage("no valid point (every x, y, z is NaN)");
     const std::uint32_t w = cloud_stream_->width(), h = cloud_stream_->height();

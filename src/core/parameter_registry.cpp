@@ -26,9 +26,11 @@ public:
     entry_.unit = text;
     return *this;
   }
-  Entry& range(ParameterRange r)
+  /// Valid values, and why the bounds are where they are.
+  Entry& range(ParameterRange r, const char* why)
   {
     entry_.range = r;
+    entry_.range.why = why;
     return *this;
   }
   Entry& choices(std::vector<std::pair<const char*, int>> list)
@@ -99,14 +101,6 @@ atLeast(double min, const char* requirement)
 }
 
 ParameterRange
-above(double min, const char* requirement)
-{
-  ParameterRange r = atLeast(min, requirement);
-  r.min_exclusive = true;
-  return r;
-}
-
-ParameterRange
 between(double min, double max, const char* requirement)
 {
   ParameterRange r = atLeast(min, requirement);
@@ -115,9 +109,9 @@ between(double min, double max, const char* requirement)
 }
 
 ParameterRange
-oddFrom(double min, const char* requirement)
+oddBetween(double min, double max, const char* requirement)
 {
-  ParameterRange r = atLeast(min, requirement);
+  ParameterRange r = between(min, max, requirement);
   r.odd = true;
   return r;
 }
@@ -141,6 +135,19 @@ using P = FilterParameters;
 const char* const kSigmas = "noise sigmas";
 const char* const kCloudUnits = "cloud units";
 
+// Reasons shared by several entries.
+const char* const kWindowCost =
+    "each point's work grows with the square of the window; the largest is already over a hundred times the "
+    "default's work, and candidates that far away weigh nothing under the automatic distance bandwidth";
+const char* const kBandwidthSquare =
+    "the weights divide by the bandwidth's square, which must stay a normal, finite float (1.2e-38 ... 3.4e38)";
+const char* const kScaleFactor =
+    "a factor on the automatic bandwidth: below 1/1000 no candidate but the point itself weighs anything (nothing "
+    "moves), above 1000 every candidate weighs the same (a box blur across depth edges)";
+const char* const kSigmaThreshold =
+    "a threshold in noise sigmas: beyond 1000 sigmas nothing a sensor's noise produces is left out, so larger "
+    "values only hide a unit mistake";
+
 /// The entries of the windows, the passes and the bandwidths, in the order of their fields.
 std::vector<ParameterEntry>
 windowAndBandwidthEntries()
@@ -148,50 +155,64 @@ windowAndBandwidthEntries()
   // clang-format off
   return {
     Entry("search_window", &P::search_window).unit("pixels")
-      .range(oddFrom(1, "must be a positive odd number of pixels"))
+      .range(oddBetween(1, 101, "must be a positive odd number of pixels, at most 101"), kWindowCost)
       .help("S, odd side of the search window in pixels")
       .cli("search-window").ros("search_window").pass("search"),
     Entry("patch_size", &P::patch_size).unit("pixels")
-      .range(oddFrom(1, "must be a positive odd number of pixels"))
+      .range(oddBetween(1, 51, "must be a positive odd number of pixels, at most 51"),
+             "each candidate compares P^2 pixels; a 51-pixel patch already costs 289 times the default's and spans "
+             "more than any detail the filter keeps")
       .help("P, odd side of the similarity patch in pixels")
       .cli("patch").ros("patch").pass("patch"),
     Entry("dilation", &P::dilation).unit("pixels").zeroMeans("automatic")
-      .range(atLeast(0, "must be >= 0 (0 = automatic)"))
+      .range(between(0, 64, "must be 0 (automatic) ... 64"),
+             "a frame is filtered as k^2 phases 1/k of its size, each of which must hold the windows: 64 leaves a "
+             "4096-pixel-wide frame phases 64 pixels wide, and no sensor's noise is correlated farther")
       .docs("[dilated passes](#spatially-correlated-noise-dilated-passes)")
       .help("spacing k of the search window's and patches' pixels: 0 = automatic (2 or more where the noise is "
             "spatially correlated or strong, 1 otherwise), 1 = contiguous windows")
       .cli("dilation").ros("dilation").pass("dilation"),
     Entry("scales", &P::scales)
-      .range(between(1, 6, "must be 1 (one scale) ... 6"))
+      .range(between(1, 6, "must be 1 (one scale) ... 6"),
+             "each scale halves the frame: the sixth is 1/32 of its width, narrower than the windows of any frame "
+             "a sensor delivers")
       .docs("[multiscale filtering](#multiscale-filtering)")
       .help("scales of the multiscale run: the frame halved scales - 1 times, filtered from the coarsest up, each "
             "finer scale after the coarser one's corrections are carried up; 1 = one scale")
       .cli("scales").ros("scales").pass("scales"),
     Entry("iterations", &P::iterations)
-      .range(between(1, 100, "must be 1 ... 100"))
+      .range(between(1, 100, "must be 1 ... 100"),
+             "each pass costs one filtering of the frame; past a few passes the output no longer changes, and 100 "
+             "bounds the run time at 50 times the default's")
       .help("filter passes; normals and automatic bandwidths are re-estimated before each")
       .cli("iterations").ros("iterations").pass("iterations"),
     Entry("threads", &P::threads).zeroMeans("all")
-      .range(between(0, P::max_threads, "must be 0 (all available) ... 1024"))
+      .range(between(0, P::max_threads, "must be 0 (all available) ... 1024"),
+             "OpenMP starts every thread asked for, and tens of thousands of them exhaust the stacks and crash")
       .help("OpenMP threads, 0 = all cores, at most 1024 (output does not depend on it)")
       .cli("threads", true).ros("threads"),
     Entry("distance_bandwidth", &P::distance_bandwidth).unit(kCloudUnits).zeroMeans("automatic")
-      .range(atLeast(0, "must be finite and >= 0 (0 = automatic)"))
+      .range(zeroOr(between(1e-18, 1e18, "must be finite and >= 0 (0 = automatic), from 1e-18 to 1e18")),
+             kBandwidthSquare)
       .help("d, bandwidth of the distance weight exp(-|p_i - p_j|^2 / d^2), in cloud units")
       .cli("distance-bandwidth").ros("distance_bandwidth").pass("distance_bandwidth").explicitPositive(),
     Entry("similarity_bandwidth", &P::similarity_bandwidth).unit(kCloudUnits).zeroMeans("automatic")
-      .range(atLeast(0, "must be finite and >= 0 (0 = automatic)"))
+      .range(zeroOr(between(1e-18, 1e18, "must be finite and >= 0 (0 = automatic), from 1e-18 to 1e18")),
+             kBandwidthSquare)
       .help("s, bandwidth of the similarity weight exp(-Sim / s^2), in cloud units")
       .cli("similarity-bandwidth").ros("similarity_bandwidth").pass("similarity_bandwidth").explicitPositive(),
     Entry("distance_scale", &P::distance_scale)
-      .range(above(0, "must be finite and > 0"))
+      .range(between(1e-3, 1e3, "must be finite and > 0, from 0.001 to 1000"), kScaleFactor)
       .help("factor on mu_d (or the window extent) for the automatic d")
       .cli("distance-scale").ros("distance_scale").pass("distance_scale"),
     Entry("similarity_scale", &P::similarity_scale)
-      .range(above(0, "must be finite and > 0"))
+      .range(between(1e-3, 1e3, "must be finite and > 0, from 0.001 to 1000"), kScaleFactor)
       .help("factor on sigma_s (or the local noise sigma) for the automatic s")
       .cli("similarity-scale").ros("similarity_scale").pass("similarity_scale"),
     Entry("seed", &P::seed)
+      .range(between(0, 18446744073709551615.0, "must be an integer from 0 to 2^64 - 1"),
+             "every 64-bit value seeds the sample; the bounds are the field's type (a negative value is refused "
+             "where text is read, never taken modulo 2^64)")
       .help("seed of the bandwidth sample")
       .cli("seed", true).ros("seed"),
   };
@@ -206,35 +227,46 @@ normalAndMoveEntries()
   // clang-format off
   return {
     Entry("bandwidth_samples", &P::bandwidth_samples)
-      .range(atLeast(1, "must be at least 1"))
+      .range(between(1, P::max_bandwidth_samples, "must be at least 1, at most 100000"),
+             "the samples are drawn with replacement and binned by range into at most 8 bins of the noise profile: "
+             "100000 samples (100 times the default) put 12500 windows in each, where a median's sampling error "
+             "(about 1.25 / sqrt(n) of the spread) is 1 %, whatever the frame's size; more only cost time (a plane "
+             "fit over the search window each, every iteration) and memory (about 30 bytes each, counted in the "
+             "tools' memory estimate)")
       .help("random valid points sampled for the automatic bandwidths")
       .cli("bandwidth-samples").ros("bandwidth_samples").pass("bandwidth_samples"),
     Entry("normal_window", &P::normal_window).unit("pixels")
-      .range(oddFrom(3, "must be an odd number of pixels >= 3"))
+      .range(oddBetween(3, 51, "must be an odd number of pixels >= 3, at most 51"),
+             "a plane fit over N^2 points: a 51-pixel fit already spans whole objects, and its normal is no longer "
+             "the surface's at the point")
       .help("odd side of the normal-estimation neighbourhood (the plane fit)")
       .cli("normal-window").ros("normal_window").pass("normal"),
     Entry("normal_presmooth_window", &P::normal_presmooth_window).unit("pixels").zeroMeans("off")
-      .range(zeroOr(oddFrom(1, "must be 0 (off) or odd")))
+      .range(zeroOr(oddBetween(1, 51, "must be 0 (off) or odd, at most 51")),
+             "a smoothing of N^2 points a pixel: wider than 51 pixels it costs more than the filter and smooths "
+             "over whole objects")
       .help("side of the edge-preserving depth pre-smoothing of the copy the normals are estimated from; "
             "0 or 1 = normals from the raw points")
       .cli("normal-presmooth-window").ros("normal_presmooth_window").pass("normal_presmooth_window"),
     Entry("normal_presmooth_range", &P::normal_presmooth_range).unit(kSigmas)
-      .range(above(0, "must be finite and > 0"))
+      .range(between(0.01, 1000, "must be finite and > 0, from 0.01 to 1000"),
+             "in noise sigmas: below 1/100 sigma no neighbour weighs anything (window 0 turns the smoothing off), "
+             "above 1000 sigmas it smooths across every depth edge")
       .help("range bandwidth of that pre-smoothing")
       .cli("normal-presmooth-range").ros("normal_presmooth_range").pass("normal_presmooth_range"),
     Entry("normal_edge_gate", &P::normal_edge_gate).unit(kSigmas).zeroMeans("off")
-      .range(atLeast(0, "must be finite and >= 0 (0 = off)"))
+      .range(between(0, 1000, "must be finite and >= 0 (0 = off), at most 1000"), kSigmaThreshold)
       .help("gated normals: neighbours farther than this from a first plane fit through the point are left out "
             "of a second fit")
       .cli("normal-edge-gate").ros("normal_edge_gate").pass("normal_edge_gate"),
     Entry("patch_edge_gate", &P::patch_edge_gate).unit(kSigmas).zeroMeans("off")
-      .range(atLeast(0, "must be finite and >= 0 (0 = off)"))
+      .range(between(0, 1000, "must be finite and >= 0 (0 = off), at most 1000"), kSigmaThreshold)
       .docs("[gated patches](#depth-edges-in-the-patches-gated-patches)")
       .help("pixels of a point's patch farther than this many noise sigmas from its tangent plane (the other "
             "side of a depth edge) are left out of the patch comparison")
       .cli("patch-gate").ros("patch_gate").pass("patch_edge_gate"),
     Entry("line_of_sight_min_cos", &P::line_of_sight_min_cos)
-      .range(between(0, 1, "must be in [0, 1]"))
+      .range(between(0, 1, "must be in [0, 1]"), "a cosine")
       .help("smallest |cos(normal, ray)| of the ray step h / cos of a move along the line of sight")
       .cli("line-of-sight-min-cos").ros("line_of_sight_min_cos").pass("line_of_sight_min_cos"),
     Entry("bandwidth_model", &P::bandwidth_model)
@@ -244,11 +276,11 @@ normalAndMoveEntries()
             "'global' (one d and s for the frame, the paper)")
       .cli("bandwidth-model").ros("bandwidth_model").pass("bandwidth_model"),
     Entry("max_displacement", &P::max_displacement).unit(kSigmas).zeroMeans("unlimited")
-      .range(atLeast(0, "must be finite and >= 0 (0 = unlimited)"))
+      .range(between(0, 1000, "must be finite and >= 0 (0 = unlimited), at most 1000"), kSigmaThreshold)
       .help("largest move of a point, in noise sigmas (range_adaptive) or in s (global)")
       .cli("max-displacement").ros("max_displacement").pass("max_displacement"),
     Entry("outlier_sigmas", &P::outlier_sigmas).unit(kSigmas).zeroMeans("off")
-      .range(atLeast(0, "must be finite and >= 0 (0 = off)"))
+      .range(between(0, 1000, "must be finite and >= 0 (0 = off), at most 1000"), kSigmaThreshold)
       .docs("[Isolated outliers](#isolated-outliers)")
       .help("isolated outliers (structured-light mismatches, time-of-flight flying pixels) farther than this "
             "many noise sigmas from all their neighbours are moved along their ray onto the neighbours' surface "
@@ -294,7 +326,9 @@ normalAndMoveEntries()
             "the filter's weights (an 'uncertainty' field in PCD output)")
       .cli("uncertainty").ros("uncertainty").pass("uncertainty"),
     Entry("fill_holes", &P::fill_holes).unit("pixels").zeroMeans("off")
-      .range(between(0, 64, "must be 0 (off) ... 64 pixels"))
+      .range(between(0, 64, "must be 0 (off) ... 64 pixels"),
+             "a wider gap is a region the sensor did not see, not a dropout; the search for a hole's candidates "
+             "grows with its width")
       .docs("[hole filling](#hole-filling)")
       .help("fill holes (invalid regions not touching the frame border) at most this many pixels wide from "
             "candidates whose patches match the hole's border, never across a depth edge; filled points are "
@@ -336,7 +370,12 @@ inRange(const ParameterRange& r, T value)
     return false;
   if (r.zero_allowed && x == 0.0)
     return true;
-  if (!(r.min_exclusive ? x > r.min : x >= r.min) || !(x <= r.max))
+  // A bound is compared as the field holds it: a float field's 0.01 is the float nearest 0.01.
+  const auto held = [](double bound) {
+    return std::is_floating_point_v<T> ? static_cast<double>(static_cast<T>(bound)) : bound;
+  };
+  const double min = held(r.min), max = held(r.max);
+  if (!(r.min_exclusive ? x > min : x >= min) || !(x <= max))
     return false;
   if constexpr (std::is_integral_v<T>)
     return !r.odd || value % 2 != 0;

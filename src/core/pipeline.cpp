@@ -198,7 +198,34 @@ checkFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
     }
   if (input.countValid() == 0)
     throw UnfilterableFrame("range_nlm: the cloud has no valid point (all NaN); nothing to filter");
+  checkCoordinateScale(input);
 }
+
+} // namespace
+
+void
+checkCoordinateScale(const Grid& frame)
+{
+  float largest = 0.0f;
+  bool any = false;
+  const std::size_t n = frame.size();
+  for (std::size_t i = 0; i < n; ++i)
+    if (frame.valid[i]) {
+      any = true;
+      largest = std::max({largest, std::fabs(frame.x[i]), std::fabs(frame.y[i]), std::fabs(frame.z[i])});
+    }
+  if (!any || (largest >= kSmallestLargestCoordinate && largest <= kLargestCoordinate))
+    return; // a frame without a valid point is reported as such
+  std::ostringstream msg;
+  msg << "range_nlm: the cloud's coordinates reach " << (largest > kLargestCoordinate ? "" : "only ") << largest
+      << " in magnitude; the filter's float arithmetic (squared distances) needs the largest coordinate between "
+      << kSmallestLargestCoordinate << " and " << kLargestCoordinate
+      << ": rescale the cloud (e.g. to metres) to filter it";
+  throw UnfilterableFrame(msg.str());
+}
+
+namespace
+{
 
 /// The filtered frame starts as the input. A grid of workspace.inputs that no other frame shares
 /// is taken over instead of copied (the input is not used after this).
@@ -266,6 +293,9 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   // Checked before anything runs with parameters.threads threads (OpenMP crashes on absurd counts).
   parameters.validate();
   checkViewpoint(viewpoint, "the viewpoint (sensor origin)");
+  // Before any path whose parts (the phases of a dilation, the scales) may skip what they cannot
+  // filter: a frame out of the float arithmetic's range is reported, not passed over in parts.
+  checkCoordinateScale(*given[center]);
   std::vector<const Grid*> frames = given;
   workspace.run.outliers_moved = 0; // every path below keeps it
   workspace.prior_sigma.clear();

@@ -62,6 +62,26 @@ struct PngContext
   std::string refusal;
 };
 
+/// The name of a colour type of a PNG header (IHDR), as stored in the file.
+const char*
+colorTypeName(int color_type)
+{
+  switch (color_type) {
+  case PNG_COLOR_TYPE_GRAY:
+    return "greyscale";
+  case PNG_COLOR_TYPE_GRAY_ALPHA:
+    return "greyscale + alpha";
+  case PNG_COLOR_TYPE_RGB:
+    return "RGB";
+  case PNG_COLOR_TYPE_RGB_ALPHA:
+    return "RGBA";
+  case PNG_COLOR_TYPE_PALETTE:
+    return "palette";
+  default:
+    return "unknown colour type";
+  }
+}
+
 void
 onPngError(png_structp png, png_const_charp message)
 {
@@ -116,6 +136,7 @@ readPngPixels(PngContext& context)
   }
   const int color_type = png_get_color_type(png, context.info);
   const int bit_depth = png_get_bit_depth(png, context.info);
+  context.pixels.format = std::to_string(bit_depth) + "-bit " + colorTypeName(color_type);
   if (color_type == PNG_COLOR_TYPE_PALETTE)
     png_set_palette_to_rgb(png);
   if (bit_depth < 8)
@@ -176,23 +197,6 @@ destroyReader(PngContext& context)
   if (context.file != nullptr)
     std::fclose(context.file);
   context.file = nullptr;
-}
-
-const char*
-colorTypeName(int channels)
-{
-  switch (channels) {
-  case 1:
-    return "greyscale";
-  case 2:
-    return "greyscale + alpha";
-  case 3:
-    return "RGB";
-  case 4:
-    return "RGBA";
-  default:
-    return "unknown colour type";
-  }
 }
 
 } // namespace
@@ -424,8 +428,7 @@ readDepthPng(const std::string& path, const io::MemoryBudget& budget)
 {
   detail::PngPixels pixels = detail::readPng(path, budget, sizeof(pcl::PointXYZ));
   if (pixels.channels != 1 || pixels.bit_depth != 16)
-    throw std::invalid_argument(quoted(path) + ": not a 16-bit greyscale depth PNG (found " +
-                                std::to_string(pixels.bit_depth) + "-bit " + colorTypeName(pixels.channels) + ")");
+    throw std::invalid_argument(quoted(path) + ": not a 16-bit greyscale depth PNG (found " + pixels.format + ")");
   DepthImage image;
   image.width = pixels.width;
   image.height = pixels.height;

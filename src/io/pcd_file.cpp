@@ -264,12 +264,13 @@ private:
       fail(path_, kMalformed + "second FIELDS line");
     if (n == 0)
       fail(path_, kMalformed + "FIELDS line names no field");
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::size_t j = 0; j < i; ++j)
-        if (t[i + 1] == t[j + 1] && t[i + 1] != "_")
-          fail(path_, kMalformed + "field " + quote(t[i + 1]) + " appears twice");
+    const std::vector<std::string> names(t.begin() + 1, t.end());
+    const std::string problem = fieldLayoutProblem(names, std::vector<std::uint64_t>(n, 1), kMaxPointStep);
+    if (!problem.empty())
+      fail(path_, kMalformed + problem);
+    for (const std::string& name : names) {
       pcl::PCLPointField f;
-      f.name = t[i + 1];
+      f.name = name;
       layout_.fields.push_back(f);
     }
     layout_.sizes.assign(n, 4);
@@ -305,11 +306,14 @@ private:
   void parseCount(const std::vector<std::string>& t)
   {
     needFields(t);
+    std::vector<std::string> names;
     for (std::size_t i = 0; i + 1 < t.size(); ++i) {
       counts_[i] = number(t[0], t[i + 1]);
-      if (counts_[i] < 1 || counts_[i] > kMaxPointStep)
-        fail(path_, kMalformed + "field " + quote(layout_.fields[i].name) + " has COUNT " + std::to_string(counts_[i]));
+      names.push_back(layout_.fields[i].name);
     }
+    const std::string problem = fieldLayoutProblem(names, counts_, kMaxPointStep);
+    if (!problem.empty())
+      fail(path_, kMalformed + problem);
   }
 
   /// WIDTH, HEIGHT or POINTS.
@@ -538,6 +542,20 @@ checkAsciiBody(const std::string& path, const PcdLayout& layout)
                    " points)");
 }
 } // namespace
+
+std::string
+fieldLayoutProblem(const std::vector<std::string>& names, const std::vector<std::uint64_t>& counts,
+                   std::uint64_t max_count)
+{
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j)
+      if (names[i] == names[j] && names[i] != "_")
+        return "field " + quote(names[i]) + " appears twice";
+    if (i < counts.size() && (counts[i] < 1 || counts[i] > max_count))
+      return "field " + quote(names[i]) + " has COUNT " + std::to_string(counts[i]);
+  }
+  return "";
+}
 
 LoadedCloud
 loadCloud(const std::string& path, bool organized, const MemoryBudget& budget)

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -14,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 #include <variant>
+#include <vector>
 
 using namespace range_nlm;
 
@@ -105,7 +107,8 @@ TEST(ParameterRegistry, ExistingNamesKeepTheirFields)
 TEST(ParameterRegistry, ValidateRefusesEveryOutOfRangeValueByName)
 {
   for (const ParameterEntry& entry : parameterRegistry()) {
-    if (!entry.range.requirement)
+    // An unsigned field's bounds are its type's (EveryNumericParameterIsBounded... checks it).
+    if (!entry.range.requirement || std::holds_alternative<std::uint64_t FilterParameters::*>(entry.field))
       continue;
     const std::string name = entry.name;
     // Below the smallest valid value (NaN for a number: never valid).
@@ -119,9 +122,99 @@ TEST(ParameterRegistry, ValidateRefusesEveryOutOfRangeValueByName)
       EXPECT_NE(validationMessage(withNumber(entry, {}, std::numeric_limits<double>::infinity())), "") << name;
     if (entry.range.odd)
       EXPECT_NE(validationMessage(withNumber(entry, {}, entry.range.min + 1)), "") << name;
-    if (std::isfinite(entry.range.max))
-      EXPECT_NE(validationMessage(withNumber(entry, {}, entry.range.max + 1)), "") << name;
+    if (std::isfinite(entry.range.max)) // twice the largest: 1e18 + 1 is 1e18 in a float
+      EXPECT_NE(validationMessage(withNumber(entry, {}, 2 * entry.range.max + 1)), "") << name;
   }
+}
+
+namespace
+{
+/// The smallest and largest valid values of a numeric entry, and values just outside them that its
+/// field's type can hold (none where the bound is the type's own).
+struct Bounds
+{
+  double lowest = 0, highest = 0;
+  std::vector<double> outside;
+};
+
+template <typename T>
+Bounds
+boundsOf(const ParameterRange& r)
+{
+  Bounds b;
+  if constexpr (std::is_floating_point_v<T>) {
+    const T min = static_cast<T>(r.min), max = static_cast<T>(r.max);
+    const T below = std::nextafter(min, -std::numeric_limits<T>::infinity());
+    b.lowest = r.min_exclusive ? std::nextafter(min, std::numeric_limits<T>::infinity()) : min;
+    b.highest = max;
+    if (!(r.zero_allowed && (r.min_exclusive ? min : below) == T(0)))
+      b.outside.push_back(r.min_exclusive ? min : below);
+    b.outside.push_back(std::nextafter(max, std::numeric_limits<T>::infinity()));
+    b.outside.push_back(std::numeric_limits<T>::max());
+    b.outside.push_back(std::numeric_limits<T>::lowest());
+  } else {
+    const double first = r.min_exclusive ? r.min + 1 : r.min;
+    b.lowest = r.odd && std::fmod(first, 2.0) == 0.0 ? first + 1 : first;
+    b.highest = r.odd && std::fmod(r.max, 2.0) == 0.0 ? r.max - 1 : r.max;
+    if (first - 1 >= double(std::numeric_limits<T>::lowest()) && !(r.zero_allowed && first - 1 == 0))
+      b.outside.push_back(first - 1);
+    if (r.max < double(std::numeric_limits<T>::max()))
+      b.outside.push_back(r.max + 1);
+    if (double(std::numeric_limits<T>::max()) > r.max)
+      b.outside.push_back(double(std::numeric_limits<T>::max()));
+    if (double(std::numeric_limits<T>::lowest()) < r.min)
+      b.outside.push_back(double(std::numeric_limits<T>::lowest()));
+  }
+  return b;
+}
+} // namespace
+
+// Every numeric parameter has a finite smallest and largest value, with the reason for them, and
+// validate() takes both and refuses the values just outside (and the type's extremes). A field
+// added without bounds fails here: without them a single option can take all the memory or time
+// of the machine, or overflow the float arithmetic.
+TEST(ParameterRegistry, EveryNumericParameterIsBoundedAndValidateEnforcesTheBounds)
+{
+  for (const ParameterEntry& entry : parameterRegistry()) {
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(FilterParameters{}.*member)>;
+          if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+            const ParameterRange& r = entry.range;
+            const std::string name = entry.name;
+            ASSERT_NE(r.requirement, nullptr) << name << " has no valid range";
+            EXPECT_TRUE(std::isfinite(r.min)) << name << " has no smallest value";
+            EXPECT_TRUE(std::isfinite(r.max)) << name << " has no largest value";
+            EXPECT_TRUE(r.why && *r.why) << name << " does not say why its range ends where it does";
+            if (!std::isfinite(r.min) || !std::isfinite(r.max))
+              return;
+            EXPECT_LE(r.min, r.max) << name;
+            // Bounds the field's type cannot hold would not bound it.
+            EXPECT_GE(r.min, double(std::numeric_limits<T>::lowest())) << name;
+            EXPECT_LE(r.max, double(std::numeric_limits<T>::max())) << name;
+            const Bounds b = boundsOf<T>(r);
+            EXPECT_EQ(validationMessage(withNumber(entry, {}, b.lowest)), "") << name << " = " << b.lowest;
+            EXPECT_EQ(validationMessage(withNumber(entry, {}, b.highest)), "") << name << " = " << b.highest;
+            for (const double value : b.outside) {
+              const std::string message = validationMessage(withNumber(entry, {}, value));
+              EXPECT_NE(message.find("parameter " + name + " = "), std::string::npos) << name << " = " << value;
+            }
+            if (r.zero_allowed)
+              EXPECT_EQ(validationMessage(withNumber(entry, {}, 0)), "") << name;
+          }
+        },
+        entry.field);
+  }
+}
+
+// The samples of the bandwidth estimate serve a few per-range medians: their number is bounded,
+// and 2^31 - 1 of them (tens of GB of samples) is refused by name.
+TEST(ParameterRegistry, BandwidthSamplesAreBoundedByTheirPurpose)
+{
+  const ParameterEntry& samples = *findParameter("bandwidth_samples");
+  EXPECT_EQ(validationMessage(withNumber(samples, {}, FilterParameters::max_bandwidth_samples)), "");
+  EXPECT_EQ(validationMessage(withNumber(samples, {}, 2147483647.0)),
+            "range_nlm: parameter bandwidth_samples = 2147483647 is invalid: must be at least 1, at most 100000");
 }
 
 TEST(ParameterRegistry, RangesAreTheDocumentedOnes)
@@ -141,7 +234,7 @@ TEST(ParameterRegistry, RangesAreTheDocumentedOnes)
   EXPECT_TRUE(valid("distance_bandwidth", 0));
   EXPECT_FALSE(valid("distance_bandwidth", -0.5));
   EXPECT_EQ(validationMessage(withNumber(*findParameter("patch_edge_gate"), {}, -2)),
-            "range_nlm: parameter patch_edge_gate = -2 is invalid: must be finite and >= 0 (0 = off)");
+            "range_nlm: parameter patch_edge_gate = -2 is invalid: must be finite and >= 0 (0 = off), at most 1000");
 }
 
 TEST(ParameterRegistry, TextRoundTripsEveryField)

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <png.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -14,6 +16,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -495,6 +498,71 @@ TEST_F(DepthImageTest, ReadErrorsNameTheFile)
   const std::string colour = path("rgb16.png");
   detail::writePng(colour, rgb16);
   expectInvalid([&] { readDepthPng(colour); }, {colour, "16-bit RGB"});
+}
+
+namespace
+{
+/// A 4 x 2 PNG of `bit_depth` bits and `color_type` (PNG_COLOR_TYPE_*), pixels of zeros; a palette
+/// image gets a palette of 2^bit_depth grey entries.
+void
+writeStoredPng(const std::string& path, int bit_depth, int color_type)
+{
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(file, nullptr);
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  ASSERT_TRUE(png && info);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(file);
+    FAIL() << "libpng failed writing " << path;
+  }
+  png_init_io(png, file);
+  const png_uint_32 width = 4, height = 2;
+  png_set_IHDR(png, info, width, height, bit_depth, color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  std::vector<png_color> palette(std::size_t(1) << bit_depth);
+  for (std::size_t i = 0; i < palette.size(); ++i)
+    palette[i].red = palette[i].green = palette[i].blue = static_cast<png_byte>(i);
+  if (color_type == PNG_COLOR_TYPE_PALETTE)
+    png_set_PLTE(png, info, palette.data(), static_cast<int>(palette.size()));
+  png_write_info(png, info);
+  std::vector<png_byte> row(width * 8 * 2, 0); // room for 16-bit RGBA
+  for (png_uint_32 v = 0; v < height; ++v)
+    png_write_row(png, row.data());
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  std::fclose(file);
+}
+} // namespace
+
+// A PNG that is not a depth image is named by its format as stored in the file, not by what
+// libpng expands it to for reading (a palette image is not RGB, a 1-bit one not 8-bit).
+TEST_F(DepthImageTest, OtherPngFormatsAreNamedAsStored)
+{
+  const struct
+  {
+    int bit_depth, color_type;
+    const char* name;
+  } formats[] = {{8, PNG_COLOR_TYPE_PALETTE, "8-bit palette"},
+                 {4, PNG_COLOR_TYPE_PALETTE, "4-bit palette"},
+                 {1, PNG_COLOR_TYPE_GRAY, "1-bit greyscale"},
+                 {2, PNG_COLOR_TYPE_GRAY, "2-bit greyscale"},
+                 {8, PNG_COLOR_TYPE_GRAY, "8-bit greyscale"},
+                 {16, PNG_COLOR_TYPE_GRAY_ALPHA, "16-bit greyscale + alpha"},
+                 {8, PNG_COLOR_TYPE_RGB, "8-bit RGB"},
+                 {16, PNG_COLOR_TYPE_RGB_ALPHA, "16-bit RGBA"}};
+  for (const auto& format : formats) {
+    const std::string file =
+        path("stored-" + std::to_string(format.bit_depth) + "-" + std::to_string(format.color_type) + ".png");
+    writeStoredPng(file, format.bit_depth, format.color_type);
+    try {
+      readDepthPng(file);
+      ADD_FAILURE() << format.name << " read as a depth image";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("(found ") + format.name + ")"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST_F(DepthImageTest, WriteErrorsNameTheFile)

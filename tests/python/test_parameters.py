@@ -45,6 +45,9 @@ def test_command_line_names_are_accepted_too():
         ({"displacement": "sideways"}, "parameter displacement = 'sideways' is invalid: must be 'automatic'"),
         ({"distance_bandwidth": 0}, "distance_bandwidth = 0 is invalid: a bandwidth given explicitly"),
         ({"threads": 10**12}, "parameter threads = 1000000000000 is invalid"),
+        ({"bandwidth_samples": 2**31 - 1},
+         "parameter bandwidth_samples = 2147483647 is invalid: must be at least 1, at most 100000"),
+        ({"seed": -1}, "parameter seed = -1 is invalid"),
     ],
 )
 def test_bad_values_raise_value_error_naming_parameter_and_value(keywords, message):

@@ -100,7 +100,7 @@ TEST(ParameterReconfigure, BadRequestsAreRefusedNamingTheParameter)
   using C = dynamic_reconfigure::Config;
   EXPECT_EQ(refusal(request(&C::ints, "search_window", 8)),
             "reconfigure: parameter search_window: range_nlm: parameter search_window = 8 is invalid: must be a "
-            "positive odd number of pixels");
+            "positive odd number of pixels, at most 101");
   EXPECT_EQ(refusal(request(&C::doubles, "search_window", 9.0)),
             "reconfigure: parameter search_window must be an integer");
   EXPECT_EQ(refusal(request(&C::strs, "outlier_sigmas", std::string("2.5"))),

@@ -486,7 +486,7 @@ TEST(RosParameters, BadValuesAreRefusedNamingTheParameter)
 {
   ros::param::set("/rnlm_bad1/patch_gate", -1.0);
   EXPECT_EQ(rosRefusal("/rnlm_bad1"), "parameter ~patch_gate: range_nlm: parameter patch_edge_gate = -1 is invalid: "
-                                      "must be finite and >= 0 (0 = off)");
+                                      "must be finite and >= 0 (0 = off), at most 1000");
   ros::param::set("/rnlm_bad2/search_window", 7.5);
   EXPECT_NE(rosRefusal("/rnlm_bad2").find("parameter ~search_window must be an integer"), std::string::npos);
   ros::param::set("/rnlm_bad3/cross_frame", std::string("always"));

@@ -410,9 +410,12 @@ TEST_F(HostileRuns, ParameterAndPathHolesAreClosed)
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("iterations = 1000000000 is invalid: must be 1 ... 100"), std::string::npos) << r.output;
   r = test::runDenoise(run + "--dilation 1000000");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("dilation = 1000000 is invalid: must be 0 (automatic) ... 64"), std::string::npos)
+      << r.output;
+  r = test::runDenoise(run + "--dilation 64");
   EXPECT_EQ(r.status, 1) << r.output;
-  EXPECT_NE(r.output.find("dilation = 1000000 splits the cloud (32 x 24) into phases of 0 x 0 pixels"),
-            std::string::npos)
+  EXPECT_NE(r.output.find("dilation = 64 splits the cloud (32 x 24) into phases of 0 x 0 pixels"), std::string::npos)
       << r.output;
   r = test::runDenoise(path("in.pcd") + " '' -q");
   EXPECT_EQ(r.status, 2) << r.output;

@@ -261,6 +261,11 @@ addOption(po::options_description& options, const ParameterEntry& entry)
         using T = std::decay_t<decltype(d.*member)>;
         if constexpr (std::is_enum_v<T>) {
           options.add_options()(entry.cli_option, po::value<std::string>(), help.c_str());
+        } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+          auto* value = po::value<Unsigned64>();
+          if (entry.cli_always)
+            value = unsigned64Value(d.*member);
+          options.add_options()(entry.cli_option, value, help.c_str());
         } else {
           auto* value = po::value<T>();
           if (entry.cli_always)
@@ -285,6 +290,8 @@ setFromOption(const po::variables_map& vm, const ParameterEntry& entry, FilterPa
             throw UsageError("--" + std::string(entry.cli_option) + " '" + text + "' is invalid: expected " +
                              choiceList(entry));
           p.*member = static_cast<T>(value);
+        } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+          p.*member = vm[entry.cli_option].as<Unsigned64>().value;
         } else {
           p.*member = vm[entry.cli_option].as<T>();
         }
@@ -350,12 +357,23 @@ filterParametersFrom(const po::variables_map& vm)
   return p;
 }
 
-std::vector<std::string>
-listFrames(const std::string& directory, const std::string& extension)
+namespace
 {
+/// The files of `directory` ending in `extension` (not hidden), unsorted; throws InputError if
+/// the directory is missing, is not a directory, or cannot be listed, saying why.
+std::vector<std::string>
+framesIn(const std::string& directory, const std::string& extension)
+{
+  struct stat status;
+  if (::stat(directory.c_str(), &status) != 0) {
+    const int error = errno;
+    if (error == ENOENT)
+      throw InputError("input directory '" + directory + "' does not exist");
+    throw InputError("cannot read input directory '" + directory + "': " + std::strerror(error));
+  }
+  if (!S_ISDIR(status.st_mode))
+    throw InputError("input directory '" + directory + "' is not a directory");
   std::error_code ec;
-  if (!fs::is_directory(directory, ec))
-    throw InputError("input directory '" + directory + "' does not exist or is not a directory");
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(directory, ec)) {
     // An entry whose kind cannot be told (a loop of symbolic links) is kept: reading it then
@@ -370,7 +388,15 @@ listFrames(const std::string& directory, const std::string& extension)
       files.push_back(entry.path().string());
   }
   if (ec)
-    throw InputError("cannot read directory '" + directory + "': " + ec.message());
+    throw InputError("cannot read input directory '" + directory + "': " + ec.message());
+  return files;
+}
+} // namespace
+
+std::vector<std::string>
+listFrames(const std::string& directory, const std::string& extension)
+{
+  std::vector<std::string> files = framesIn(directory, extension);
   if (files.empty())
     throw InputError("input directory '" + directory + "' holds no " + extension + " frame");
   std::sort(files.begin(), files.end());
@@ -669,21 +695,45 @@ memoryBudgetFrom(const po::variables_map& vm,
   return budget;
 }
 
+void
+validate(boost::any& v, const std::vector<std::string>& values, Unsigned64*, int)
+{
+  po::validators::check_first_occurrence(v);
+  const std::string& text = po::validators::get_single_string(values);
+  std::uint64_t value = 0;
+  bool ok = !text.empty() && text.size() <= 20;
+  for (const char c : text)
+    ok = ok && c >= '0' && c <= '9';
+  if (ok) {
+    errno = 0;
+    value = std::strtoull(text.c_str(), nullptr, 10);
+    ok = errno == 0;
+  }
+  if (!ok) {
+    po::error_with_option_name error("the argument ('%value%') for option '%canonical_option%' is invalid: "
+                                     "expected an integer from 0 to 18446744073709551615");
+    error.set_substitute("value", text);
+    throw error;
+  }
+  v = boost::any(Unsigned64{value});
+}
+
+po::typed_value<Unsigned64>*
+unsigned64Value(std::uint64_t value)
+{
+  return po::value<Unsigned64>()->default_value(Unsigned64{value}, std::to_string(value));
+}
+
 std::vector<std::string>
 listInputFrames(const std::string& directory)
 {
-  try {
-    return listFrames(directory, ".pcd");
-  } catch (const InputError&) {
-    std::error_code ec;
-    if (!fs::is_directory(directory, ec))
-      throw;
-  }
-  try {
-    return listFrames(directory, ".png");
-  } catch (const InputError&) {
+  std::vector<std::string> files = framesIn(directory, ".pcd");
+  if (files.empty())
+    files = framesIn(directory, ".png");
+  if (files.empty())
     throw InputError("input directory '" + directory + "' holds no .pcd frame and no .png depth image");
-  }
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 std::string

@@ -196,6 +196,20 @@ io::MemoryBudget
 memoryBudgetFrom(const boost::program_options::variables_map& vm,
                  std::function<std::uint64_t(std::uint64_t, std::uint64_t, std::uint64_t)> estimate);
 
+/// The value of an option that is an unsigned 64-bit integer (a seed). boost reads "-1" into a
+/// std::uint64_t as 2^64 - 1; this refuses a sign (and anything but the digits of a number that
+/// fits), naming the option and the value.
+struct Unsigned64
+{
+  std::uint64_t value = 0;
+};
+/// The reader of an Unsigned64 option; boost::program_options finds it by argument-dependent lookup.
+void
+validate(boost::any& v, const std::vector<std::string>& values, Unsigned64*, int);
+/// An Unsigned64 option's value semantic with default `value` (shown as a number in the help).
+boost::program_options::typed_value<Unsigned64>*
+unsigned64Value(std::uint64_t value);
+
 /// The frames of an input directory, sorted by name: its *.pcd files if it has any, otherwise
 /// its *.png depth images. Throws InputError if the directory is missing or holds neither.
 std::vector<std::string>

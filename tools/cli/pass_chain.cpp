@@ -33,7 +33,8 @@ PassChain::take(std::size_t level, const std::vector<TemporalStream<pcl::PointXY
     // A recursive pass filters frames nothing needs too (its history); passed on as null, the
     // next recursive pass starts its own history exactly where the plan says.
     ChainOutput o{l.needed[l.emitted++] ? ready[i] : nullptr, l.stream->lastOutputs()[i]};
-    filtered_ += o.info.milliseconds > 0.0; // a frame passed over took no time
+    // A frame passed over took no time; one that could not be filtered is written unchanged.
+    filtered_ += o.info.milliseconds > 0.0 && o.info.problem.empty();
     const TemporalStream<pcl::PointXYZ>::OutputInfo before = l.carried.front();
     l.carried.pop_front();
     if (level > 0) {

@@ -25,6 +25,23 @@ struct UnfilterableFrame : std::invalid_argument
   using std::invalid_argument::invalid_argument;
 };
 
+/// The largest coordinate magnitude of a frame the filter's float arithmetic handles: the squared
+/// distances of the points, their plane fits and the weights' exponents stay finite, normal
+/// floats. Measured: a frame's output is the same, up to float rounding, with its coordinates
+/// scaled by any factor from 1e-12 to 1e12, and unchanged or wrong beyond 1e15 or below 1e-15;
+/// these bounds leave a factor of 1000 to spare.
+constexpr float kLargestCoordinate = 1e9f;
+/// The smallest value the largest coordinate magnitude of a frame may have (see kLargestCoordinate).
+constexpr float kSmallestLargestCoordinate = 1e-9f;
+
+/// Throws UnfilterableFrame, naming the magnitude, if the largest coordinate magnitude of the
+/// valid points of `frame` is outside [kSmallestLargestCoordinate, kLargestCoordinate]: such a
+/// frame is passed through unchanged and reported, never "filtered" with its points unchanged.
+/// A frame in other units (kilometres, micrometres) is filtered as in metres; a frame without a
+/// valid point passes.
+void
+checkCoordinateScale(const Grid& frame);
+
 /// Sensor position the normals are oriented toward, in cloud coordinates.
 using Viewpoint = std::array<float, 3>;
 

@@ -182,6 +182,9 @@ struct PngPixels
   int channels = 0;
   /// 8 or 16 (lower depths are expanded to 8).
   int bit_depth = 0;
+  /// The file's own format, before the expansions above: its bit depth and colour type as stored,
+  /// e.g. "16-bit greyscale", "8-bit palette", "1-bit greyscale", "16-bit RGBA".
+  std::string format;
   std::vector<std::uint8_t> bytes;
 };
 /// Reads any PNG with libpng. Throws std::invalid_argument naming the file on any failure,

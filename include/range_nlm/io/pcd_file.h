@@ -11,8 +11,10 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace range_nlm
 {
@@ -84,6 +86,15 @@ isDepthImagePath(const std::string& path);
 /// body is decoded if its size does not fit `budget`. Errors name the file.
 LoadedCloud
 loadFrame(const std::string& path, const DepthIntrinsics& intrinsics, const MemoryBudget& budget = MemoryBudget());
+
+/// The first problem of a point layout's fields (their names in order, each with its element
+/// count), as a PCD header or a PointCloud2 message gives them: a name other than "_" (PCD's
+/// padding) that appears twice ("field 'x' appears twice"), or a count of 0 or above `max_count`
+/// ("field 'x' has COUNT 0"). Empty if there is none. A reader that took the first of two x
+/// fields, or read an x of no elements, would read another field's bytes as coordinates.
+std::string
+fieldLayoutProblem(const std::vector<std::string>& names, const std::vector<std::uint64_t>& counts,
+                   std::uint64_t max_count);
 
 } // namespace io
 } // namespace range_nlm

@@ -2,7 +2,9 @@
 // or noise profile (range-adaptive model).
 #include "stages.h"
 
+#include <cmath>
 #include <cstdint>
+#include <sstream>
 
 namespace range_nlm
 {
@@ -16,6 +18,14 @@ finishBandwidths(Bandwidths b, const FilterParameters& p)
 {
   b.distance = p.distance_bandwidth > 0.0f ? p.distance_bandwidth : p.distance_scale * b.mu_d;
   b.similarity = p.similarity_bandwidth > 0.0f ? p.similarity_bandwidth : p.similarity_scale * b.sigma_s;
+  // An infinite or NaN bandwidth weighs every candidate alike or none: the frame would come out
+  // unchanged, or as garbage, while counted as filtered.
+  if (!std::isfinite(b.distance) || !std::isfinite(b.similarity)) {
+    std::ostringstream msg;
+    msg << "range_nlm: the bandwidths of the frame are not finite (d = " << b.distance << ", s = " << b.similarity
+        << "); its coordinates are out of the range the float arithmetic handles";
+    throw UnfilterableFrame(msg.str());
+  }
   return b;
 }
 
@@ -34,6 +44,8 @@ void
 estimateFrame(FrameContext& ctx, int k, const Grid& g, const NormalField* normals, float rho_median)
 {
   const FilterParameters& parameters = ctx.parameters;
+  if (k != ctx.center)
+    checkCoordinateScale(g); // the current frame's was checked first
   const std::uint64_t seed = parameters.seed + static_cast<std::uint64_t>(k - ctx.center) * 7919u;
   if (ctx.adaptive) {
     // The current frame's first pass uses the profile the outlier stage estimated on it (the same

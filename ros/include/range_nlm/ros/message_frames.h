@@ -6,6 +6,8 @@
 /// saying what is wrong with it (the caller adds the stamp and drops it).
 #pragma once
 
+#include <range_nlm/parameters.h>
+
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -32,9 +34,12 @@ struct InvalidMessage : std::invalid_argument
 /// as a width x height cloud; a point with a NaN coordinate becomes NaN in all three.
 /// Throws InvalidMessage if the cloud is unorganized (height 1) or empty, lacks a float x, y or
 /// z field, a field does not fit point_step, row_step is not width * point_step, data is not
-/// row_step * height bytes, its byte order is not the host's, or a coordinate is infinite.
+/// row_step * height bytes, its byte order is not the host's, or a coordinate is infinite; if a
+/// field name appears twice or has COUNT 0 (as the PCD reader: io::fieldLayoutProblem); and,
+/// before a point is decoded, if the cloud is smaller than the smallest window of any parameters
+/// (3 x 3) or, given `parameters`, than their windows (FilterParameters::validateFor).
 Cloud::Ptr
-cloudFromPointCloud2(const sensor_msgs::PointCloud2& message);
+cloudFromPointCloud2(const sensor_msgs::PointCloud2& message, const range_nlm::FilterParameters* parameters = nullptr);
 
 /// A copy of `message` whose x, y, z are those of `xyz` (same size): every other byte, the
 /// header and the layout unchanged; is_dense recomputed.

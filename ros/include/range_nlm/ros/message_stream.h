@@ -96,6 +96,8 @@ public:
     return out;
   }
 
+  /// The filter's parameters (a frame too small for their windows is refused by push()).
+  const range_nlm::FilterParameters& parameters() const { return settings_.parameters; }
   /// The last push() started a new window because the frame size changed.
   bool restarted() const { return restarted_; }
   /// Width and height of the current window's frames (0 before the first frame).
