@@ -73,6 +73,10 @@ TEST(TemporalComparison, StaticSequenceRowsAndLibrealsenseFills)
       "range_nlm temporal, radius 1, cross-frame temporal, PNG output",
       "range_nlm temporal, radius 1, recursive, cross-frame temporal",
       "range_nlm temporal, radius 1, recursive, cross-frame temporal, PNG output",
+      "range_nlm live per frame",
+      "range_nlm live per frame, PNG output",
+      "range_nlm live temporal, radius 1, recursive",
+      "range_nlm live temporal, radius 1, recursive, PNG output",
       "librealsense temporal (alpha 0.4, delta 20, persistency 3)",
       "librealsense temporal (alpha 0.1, delta 20, persistency 3)",
       "librealsense temporal (alpha 0.4, delta 100, persistency 3)"};

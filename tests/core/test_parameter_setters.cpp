@@ -61,6 +61,7 @@ accessors()
       RANGE_NLM_ACCESSORS(uncertainty, EstimateUncertainty),
       RANGE_NLM_ACCESSORS(evaluation, Evaluation),
       RANGE_NLM_ACCESSORS(fill_holes, FillHoles),
+      RANGE_NLM_ACCESSORS(reuse_estimates, ReuseEstimates),
   };
   return all;
 }

@@ -687,7 +687,7 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
     writeDepthPng((cli / "in" / (std::to_string(k) + ".png")).string(), inputs[std::size_t(k)]);
   const CommandResult run = runDenoise("--input-dir " + (cli / "in").string() + " --output-dir " + (cli / "out").string() +
                                        " --intrinsics " + (cli / "intrinsics.txt").string() +
-                                       " --output-format png --temporal-radius 1 --causal --search-window 7 --patch 3 -q");
+                                       " --output-format png --temporal-radius 1 --causal --search-window 7 --patch 3 --preset live -q");
   ASSERT_EQ(run.status, 0) << run.output;
   for (int k = 0; k < 3; ++k)
     EXPECT_EQ(readDepthPng((cli / "out" / (std::to_string(k) + ".png")).string()).values, outputs[std::size_t(k)].values)

@@ -125,7 +125,6 @@ TEST(CliFilterOptions, HelpShowsThePresetsValues)
   std::ostringstream help;
   help << options;
   EXPECT_NE(help.str().find("[default: 9; live: 9; paper: 7]"), std::string::npos) << help.str();
-  EXPECT_NE(help.str().find("[default: 2; live: 1; paper: 1]"), std::string::npos) << help.str();
   EXPECT_NE(help.str().find("'live'"), std::string::npos) << help.str();
   EXPECT_NE(help.str().find("(=42)"), std::string::npos) << help.str();
   EXPECT_NE(help.str().find("--patch-guide"), std::string::npos) << help.str();
