@@ -13,6 +13,8 @@ range_nlm_denoise's. See docs/python.md.
 """
 
 import operator
+import os
+import warnings
 
 from . import _range_nlm
 from ._range_nlm import (
@@ -34,6 +36,24 @@ from .interop import (
     to_open3d,
     to_open3d_depth,
 )
+
+
+def _package_version():
+    """The installed distribution's version (importlib.metadata) if this package is the installed
+    one, else the version the native module was built with (the project's VERSION)."""
+    try:
+        import importlib.metadata as metadata
+        dist = metadata.distribution("range_nlm")
+        installed = os.path.realpath(str(dist.locate_file("range_nlm")))
+    except Exception:  # not installed (e.g. imported from a build tree), or no importlib.metadata
+        return _range_nlm.__version__
+    # Another range_nlm installed elsewhere says nothing about this one (a build tree on PYTHONPATH).
+    if installed != os.path.realpath(os.path.dirname(__file__)):
+        return _range_nlm.__version__
+    return dist.version
+
+
+__version__ = _package_version()
 
 __all__ = [
     "denoise",
@@ -86,6 +106,28 @@ def _intrinsics(intrinsics):
     return Intrinsics(**values)
 
 
+_default_intrinsics_warned = False
+
+
+def _default_intrinsics(caller, depth, depth_scale):
+    """Intrinsics() for a depth image given without intrinsics, with a UserWarning, once per process,
+    as range_nlm_denoise warns about depth PNGs read with default intrinsics."""
+    global _default_intrinsics_warned
+    intrinsics = Intrinsics()
+    dtype = getattr(depth, "dtype", None)
+    # Only for a depth image the call takes (uint16 or float); any other is refused with its own error.
+    is_depth = dtype is not None and ((dtype.kind == "u" and dtype.itemsize == 2) or dtype.kind == "f")
+    if is_depth and not _default_intrinsics_warned:
+        _default_intrinsics_warned = True
+        defaults = "fx %g, fy %g, cx %g, cy %g" % (intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy)
+        if depth_scale is None and dtype.kind == "u":
+            defaults += ", depth-scale %g" % intrinsics.depth_scale
+        warnings.warn("range_nlm: %s: this and any other depth image without intrinsics are read with default "
+                      "intrinsics (%s: a 640 x 480 Kinect v1 / TUM RGB-D camera); give intrinsics= for your camera, "
+                      "or the depths and positions are wrong" % (caller, defaults), UserWarning, stacklevel=3)
+    return intrinsics
+
+
 def read_intrinsics(path):
     """Reads an intrinsics.txt file (``key value`` lines: fx, fy, cx, cy, depth_scale, width,
     height; docs/usage.md). Errors name the file and line (ValueError)."""
@@ -94,8 +136,12 @@ def read_intrinsics(path):
 
 def depth_to_points(depth, intrinsics=None, depth_scale=None):
     """The H x W x 3 float32 points of a depth image (uint16 or float, as denoise_depth takes it),
-    back-projected as range_nlm_denoise reads a depth PNG; NaN where there is no measurement."""
-    intrinsics = Intrinsics() if intrinsics is None else _intrinsics(intrinsics)
+    back-projected as range_nlm_denoise reads a depth PNG; NaN where there is no measurement.
+    Without intrinsics, the defaults (as denoise_depth) with a UserWarning, once per process."""
+    if intrinsics is None:
+        intrinsics = _default_intrinsics("depth_to_points", depth, depth_scale)
+    else:
+        intrinsics = _intrinsics(intrinsics)
     return _range_nlm._depth_to_points(depth, intrinsics, depth_scale)
 
 
@@ -128,7 +174,8 @@ def denoise_depth(depth, intrinsics=None, parameters=None, *, depth_scale=None, 
     depth: H x W uint16 image (value / depth_scale = metres, 0 = no measurement), or float32 /
         float64 (value / depth_scale metres; 0, negative or NaN = no measurement).
     intrinsics: Intrinsics, dict or object with fx, fy, cx, cy (pixels); None: the defaults of
-        range_nlm_denoise (525, 525, 319.5, 239.5, depth scale 5000).
+        range_nlm_denoise (525, 525, 319.5, 239.5, depth scale 5000), with a UserWarning (once per
+        process) that they are a Kinect v1's, not necessarily the camera's.
     depth_scale: stored values per metre; default the intrinsics' for uint16 images, 1 for float.
     output: 'depth' gives a depth image of the input's dtype (uint16 exactly as range_nlm_denoise
         writes a PNG: the library's cloudToDepthImage, depths filtered past 16 bits clamped with a
@@ -136,7 +183,10 @@ def denoise_depth(depth, intrinsics=None, parameters=None, *, depth_scale=None, 
         NaN); 'points' gives the filtered H x W x 3 float32 points.
     Other arguments as denoise().
     """
-    intrinsics = Intrinsics() if intrinsics is None else _intrinsics(intrinsics)
+    if intrinsics is None:
+        intrinsics = _default_intrinsics("denoise_depth", depth, depth_scale)
+    else:
+        intrinsics = _intrinsics(intrinsics)
     result, info = _range_nlm._denoise_depth(depth, intrinsics, depth_scale, output, _parameters(parameters, params))
     return (result, info) if return_info else result
 
@@ -200,6 +250,9 @@ class Stream:
     def held_frames(self):
         """Frames held in memory (at most 2r + 1, causal r + 1)."""
         return self._stream.held_frames
+
+    def __repr__(self):
+        return "range_nlm.Stream(radius=%d, mode=%r, held_frames=%d)" % (self.radius, self.mode, self.held_frames)
 
 
 def _parameter_docs():

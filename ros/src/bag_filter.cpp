@@ -16,7 +16,9 @@
 #include <cstdlib>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include <fcntl.h>
@@ -35,6 +37,28 @@ std::string
 quoted(const std::string& s)
 {
   return "'" + s + "'";
+}
+
+/// The topics of `bag` with their message types and counts, in name order: "'/a'
+/// (sensor_msgs/PointCloud2, 3 messages), '/b' (std_msgs/String, 1 message)", or "none" for a bag
+/// without messages.
+std::string
+describeTopics(const rosbag::Bag& bag)
+{
+  rosbag::View all(bag);
+  std::map<std::string, std::set<std::string>> types;
+  for (const rosbag::ConnectionInfo* c : all.getConnections())
+    types[c->topic].insert(c->datatype);
+  std::string list;
+  for (const auto& topic : types) {
+    std::string type;
+    for (const std::string& t : topic.second)
+      type += (type.empty() ? "" : " and ") + t;
+    const std::size_t count = rosbag::View(bag, rosbag::TopicQuery(topic.first)).size();
+    list += (list.empty() ? "" : ", ") + quoted(topic.first) + " (" + type + ", " + std::to_string(count) +
+            (count == 1 ? " message)" : " messages)");
+  }
+  return list.empty() ? "none" : list;
 }
 
 /// A message of the topic on its way through the stream: what is needed to write it.
@@ -61,7 +85,8 @@ public:
     }
     rosbag::View topic_view(in, rosbag::TopicQuery(options_.topic));
     if (topic_view.size() == 0)
-      throw BagError("bag " + quoted(options_.input_bag) + " has no message on topic " + quoted(options_.topic));
+      throw BagError("bag " + quoted(options_.input_bag) + " has no message on topic " + quoted(options_.topic) +
+                     "; its topics: " + describeTopics(in));
     for (const rosbag::ConnectionInfo* c : topic_view.getConnections())
       if (c->datatype != ros::message_traits::datatype<sensor_msgs::PointCloud2>() ||
           (c->md5sum != "*" && c->md5sum != ros::message_traits::md5sum<sensor_msgs::PointCloud2>()))

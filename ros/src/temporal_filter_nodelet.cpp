@@ -62,9 +62,10 @@ TemporalFilterNodelet::advertise()
 {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
   const int queue = settings_.queue_size;
-  // Published beside the filtered output while ~uncertainty is on and it has subscribers.
-  uncertainty_output_ = private_node.advertise<sensor_msgs::Image>("uncertainty/image", queue);
-  filled_mask_ = private_node.advertise<sensor_msgs::Image>("filled/mask", queue);
+  {
+    std::lock_guard<std::mutex> lock(stream_mutex_);
+    advertiseOptionalTopics();
+  }
   if (settings_.input == "points") {
     output_ = private_node.advertise<sensor_msgs::PointCloud2>(
         "output", queue, [this](const ros::SingleSubscriberPublisher&) { onConnectionChange(); },
@@ -79,6 +80,29 @@ TemporalFilterNodelet::advertise()
     NODELET_INFO("filtering %s with %s -> %s and %s while they have subscribers", input_topic_.c_str(),
                  image_transport::getCameraInfoTopic(input_topic_).c_str(), camera_output_.getTopic().c_str(),
                  camera_output_.getInfoTopic().c_str());
+  }
+}
+
+void
+TemporalFilterNodelet::advertiseOptionalTopics()
+{
+  ros::NodeHandle& private_node = getPrivateNodeHandle();
+  const int queue = settings_.queue_size;
+  const range_nlm::FilterParameters& parameters = settings_.stream.parameters;
+  // Each published beside the filtered output while its feature is on and it has subscribers.
+  const bool uncertainty = parameters.uncertainty;
+  if (uncertainty && !uncertainty_output_) {
+    uncertainty_output_ = private_node.advertise<sensor_msgs::Image>("uncertainty/image", queue);
+  } else if (!uncertainty && uncertainty_output_) {
+    uncertainty_output_.shutdown();
+    uncertainty_output_ = ros::Publisher();
+  }
+  const bool filling = parameters.fill_holes > 0;
+  if (filling && !filled_mask_) {
+    filled_mask_ = private_node.advertise<sensor_msgs::Image>("filled/mask", queue);
+  } else if (!filling && filled_mask_) {
+    filled_mask_.shutdown();
+    filled_mask_ = ros::Publisher();
   }
 }
 
@@ -129,6 +153,7 @@ TemporalFilterNodelet::reconfigure(const StreamSettings& settings)
   if (depth_stream_)
     publishDepth(depth_stream_->flush());
   settings_.stream = settings;
+  advertiseOptionalTopics();
   restartStreams();
   NODELET_INFO("reconfigured; temporal window restarted");
   for (const std::string& line : describeSettings(settings_))
@@ -196,7 +221,7 @@ void
 TemporalFilterNodelet::publishFilledMask(const std_msgs::Header& header, const Cloud& cloud,
                                          const std::vector<unsigned char>& filled)
 {
-  if (filled.empty() || filled_mask_.getNumSubscribers() == 0)
+  if (filled.empty() || !filled_mask_ || filled_mask_.getNumSubscribers() == 0)
     return;
   sensor_msgs::Image::Ptr mask(new sensor_msgs::Image);
   mask->header = header;
@@ -261,7 +286,7 @@ void
 TemporalFilterNodelet::publishUncertainty(const std_msgs::Header& header, const Cloud& cloud,
                                           const std::vector<float>& sigma)
 {
-  if (sigma.empty() || uncertainty_output_.getNumSubscribers() == 0)
+  if (sigma.empty() || !uncertainty_output_ || uncertainty_output_.getNumSubscribers() == 0)
     return;
   uncertainty_output_.publish(
       sensor_msgs::Image::ConstPtr(uncertaintyImage(header, cloud.width, cloud.height, sigma)));

@@ -541,6 +541,49 @@ checkAsciiBody(const std::string& path, const PcdLayout& layout)
     fail(path, "truncated PCD body (ascii: " + std::to_string(point) + " of " + std::to_string(layout.points) +
                    " points)");
 }
+
+/// The blob with its fields back to back in the order of their offsets and no bytes between or
+/// after them. PCL's header generator names such bytes `_` fields, which some of PCL's own
+/// converters (pcl_pcd2ply) cannot read: they abort on a `_` field that is not the last one.
+/// Returns false (and leaves `packed` alone) if the blob is packed already.
+bool
+packFields(const pcl::PCLPointCloud2& blob, pcl::PCLPointCloud2& packed)
+{
+  std::vector<pcl::PCLPointField> fields = blob.fields;
+  std::stable_sort(fields.begin(), fields.end(),
+                   [](const pcl::PCLPointField& a, const pcl::PCLPointField& b) { return a.offset < b.offset; });
+  std::vector<std::uint32_t> sizes(fields.size());
+  std::uint32_t step = 0;
+  bool already = true;
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    sizes[k] = static_cast<std::uint32_t>(pcl::getFieldSize(fields[k].datatype)) * fields[k].count;
+    already = already && fields[k].offset == step && blob.fields[k].offset == fields[k].offset;
+    step += sizes[k];
+  }
+  if (already && step == blob.point_step)
+    return false;
+  for (std::size_t k = 0; k < fields.size(); ++k)
+    if (sizes[k] == 0 || std::uint64_t(fields[k].offset) + sizes[k] > blob.point_step)
+      return false; // not a layout to repack; the header generator refuses it
+  const std::size_t points = std::size_t(blob.width) * blob.height;
+  packed.header = blob.header;
+  packed.width = blob.width;
+  packed.height = blob.height;
+  packed.is_bigendian = blob.is_bigendian;
+  packed.is_dense = blob.is_dense;
+  packed.point_step = step;
+  packed.row_step = step * blob.width;
+  packed.fields = fields;
+  packed.data.assign(points * step, 0);
+  std::uint32_t offset = 0;
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    for (std::size_t i = 0; i < points; ++i)
+      std::memcpy(&packed.data[i * step + offset], &blob.data[i * blob.point_step + fields[k].offset], sizes[k]);
+    packed.fields[k].offset = offset;
+    offset += sizes[k];
+  }
+  return true;
+}
 } // namespace
 
 std::string
@@ -688,16 +731,20 @@ writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& b
 }
 
 void
-saveCloudAtomic(const std::string& path, const pcl::PCLPointCloud2& blob, const Eigen::Vector4f& origin,
+saveCloudAtomic(const std::string& path, const pcl::PCLPointCloud2& unpacked, const Eigen::Vector4f& origin,
                 const Eigen::Quaternionf& orientation)
 {
   // PCL's PCDWriter::writeBinary fills a memory map of the file: on a full disk the kernel
   // answers with SIGBUS. The same bytes (PCL's header, then the points) go out with write(2)
   // here, every return checked.
-  if (blob.data.empty() || blob.data.size() < std::size_t(blob.point_step) * blob.width * blob.height)
-    throw InputError("'" + path + "': cannot write output file: the cloud holds " + std::to_string(blob.data.size()) +
-                     " bytes, not " + std::to_string(blob.width) + " x " + std::to_string(blob.height) + " points of " +
-                     std::to_string(blob.point_step) + " bytes");
+  if (unpacked.data.empty() ||
+      unpacked.data.size() < std::size_t(unpacked.point_step) * unpacked.width * unpacked.height)
+    throw InputError("'" + path + "': cannot write output file: the cloud holds " +
+                     std::to_string(unpacked.data.size()) + " bytes, not " + std::to_string(unpacked.width) + " x " +
+                     std::to_string(unpacked.height) + " points of " + std::to_string(unpacked.point_step) + " bytes");
+  // Written packed: no padding between or after the fields, so no `_` fields in the header.
+  pcl::PCLPointCloud2 packed_blob;
+  const pcl::PCLPointCloud2& blob = packFields(unpacked, packed_blob) ? packed_blob : unpacked;
   pcl::PCDWriter writer;
   std::string header = writer.generateHeaderBinary(blob, origin, orientation);
   if (header.empty())

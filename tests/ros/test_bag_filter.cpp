@@ -187,6 +187,12 @@ TEST_F(BagFilter, ErrorsNameTheBagAndTopicAndLeaveNoOutput)
   CommandResult r = runDenoise("--input-bag " + path("in.bag") + " --topic /nothing --output-bag " + path("out.bag"));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("no message on topic '/nothing'"), std::string::npos) << r.output;
+  // The topics the bag has, with their types.
+  EXPECT_NE(r.output.find("its topics: '/camera/depth/camera_info' (sensor_msgs/CameraInfo, 2 messages), "
+                          "'/camera/depth/points' (sensor_msgs/PointCloud2, 2 messages), "
+                          "'/log' (std_msgs/String, 2 messages)"),
+            std::string::npos)
+      << r.output;
   r = runDenoise("--input-bag " + path("in.bag") + " --topic /log --output-bag " + path("out.bag"));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("holds std_msgs/String messages, not sensor_msgs/PointCloud2"), std::string::npos)
@@ -200,6 +206,20 @@ TEST_F(BagFilter, ErrorsNameTheBagAndTopicAndLeaveNoOutput)
   r = runDenoise("--input-bag " + path("in.bag") + " --output-bag " + path("out.bag"));
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--topic"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("out.bag")));
+}
+
+TEST_F(BagFilter, AnEmptyBagSaysItHasNoTopics)
+{
+  {
+    rosbag::Bag bag(path("empty.bag"), rosbag::bagmode::Write);
+  }
+  const CommandResult r =
+      runDenoise("--input-bag " + path("empty.bag") + " --topic " + kTopic + " --output-bag " + path("out.bag"));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("has no message on topic '" + std::string(kTopic) + "'; its topics: none"),
+            std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(path("out.bag")));
 }
 

@@ -126,6 +126,18 @@ waitFor(const Condition& done)
   return true;
 }
 
+/// The master lists `topic` as published.
+bool
+advertised(const std::string& topic)
+{
+  ros::master::V_TopicInfo topics;
+  ros::master::getTopics(topics);
+  for (const auto& t : topics)
+    if (t.name == topic)
+      return true;
+  return false;
+}
+
 std::string
 readLog(const std::string& path)
 {
@@ -275,7 +287,7 @@ TEST(RosNode, TheUncertaintyImageIsPublishedWhenEnabledWithTheInputHeader)
   }
 }
 
-TEST(RosNode, TheUncertaintyImageIsNotPublishedWhenOff)
+TEST(RosNode, TheUncertaintyImageAndTheFilledMaskAreNotAdvertisedWhenOff)
 {
   ros::param::set("/rnlm_nosigma/search_window", 7);
   ros::param::set("/rnlm_nosigma/patch", 3);
@@ -285,10 +297,60 @@ TEST(RosNode, TheUncertaintyImageIsNotPublishedWhenOff)
   ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/nosigma/in", 10);
   Inbox<sensor_msgs::PointCloud2> output("/nosigma/out");
   Inbox<sensor_msgs::Image> sigma("/rnlm_nosigma/uncertainty/image");
-  ASSERT_TRUE(waitFor([&] {
-    return input.getNumSubscribers() > 0 && output.publishers() > 0 && sigma.publishers() > 0;
-  })) << readLog(node.log());
+  Inbox<sensor_msgs::Image> mask("/rnlm_nosigma/filled/mask");
+  ASSERT_TRUE(waitFor([&] { return input.getNumSubscribers() > 0 && output.publishers() > 0; }))
+      << readLog(node.log());
   input.publish(toPointCloud2(*frame(0), 400, 1));
+  ASSERT_TRUE(output.next()) << readLog(node.log());
+  // The node advertised its output: had it advertised the optional topics, the master would list them.
+  EXPECT_TRUE(advertised("/nosigma/out"));
+  EXPECT_FALSE(advertised("/rnlm_nosigma/uncertainty/image"));
+  EXPECT_FALSE(advertised("/rnlm_nosigma/filled/mask"));
+  EXPECT_EQ(sigma.publishers(), 0u);
+  EXPECT_EQ(mask.publishers(), 0u);
+  EXPECT_FALSE(sigma.next(0.5));
+}
+
+TEST(RosNode, ReconfiguringUncertaintyAndHoleFillingAdvertisesAndWithdrawsTheirTopics)
+{
+  ros::param::set("/rnlm_optional/search_window", 7);
+  ros::param::set("/rnlm_optional/patch", 3);
+  ros::param::set("/rnlm_optional/temporal_radius", 0);
+  ChildProcess node({nodeExecutable(), "__name:=rnlm_optional"}, g_master->directory() + "/rnlm_optional.log");
+  ros::NodeHandle nh;
+  ros::Publisher input = nh.advertise<sensor_msgs::PointCloud2>("/rnlm_optional/input", 10);
+  Inbox<sensor_msgs::PointCloud2> output("/rnlm_optional/output");
+  Inbox<sensor_msgs::Image> sigma("/rnlm_optional/uncertainty/image");
+  ASSERT_TRUE(waitFor([&] { return input.getNumSubscribers() > 0 && output.publishers() > 0; }))
+      << readLog(node.log());
+  ASSERT_TRUE(ros::service::waitForService("/rnlm_optional/set_parameters", 20000));
+  EXPECT_FALSE(advertised("/rnlm_optional/uncertainty/image"));
+  EXPECT_FALSE(advertised("/rnlm_optional/filled/mask"));
+
+  const auto set = [](bool uncertainty, int fill_holes) {
+    dynamic_reconfigure::Reconfigure change;
+    dynamic_reconfigure::BoolParameter b;
+    b.name = "uncertainty";
+    b.value = uncertainty;
+    change.request.config.bools.push_back(b);
+    dynamic_reconfigure::IntParameter i;
+    i.name = "fill_holes";
+    i.value = fill_holes;
+    change.request.config.ints.push_back(i);
+    return ros::service::call("/rnlm_optional/set_parameters", change);
+  };
+  ASSERT_TRUE(set(true, 6));
+  EXPECT_TRUE(advertised("/rnlm_optional/uncertainty/image"));
+  EXPECT_TRUE(advertised("/rnlm_optional/filled/mask"));
+  ASSERT_TRUE(waitFor([&] { return sigma.publishers() > 0; })) << readLog(node.log());
+  input.publish(toPointCloud2(*frame(0), 500, 1));
+  ASSERT_TRUE(output.next()) << readLog(node.log());
+  EXPECT_TRUE(sigma.next()) << "no uncertainty image once turned on\n" << readLog(node.log());
+
+  ASSERT_TRUE(set(false, 0));
+  EXPECT_FALSE(advertised("/rnlm_optional/uncertainty/image"));
+  EXPECT_FALSE(advertised("/rnlm_optional/filled/mask"));
+  input.publish(toPointCloud2(*frame(1), 501, 1));
   ASSERT_TRUE(output.next()) << readLog(node.log());
   EXPECT_FALSE(sigma.next(0.5));
 }
@@ -741,18 +803,6 @@ bool
 hasSubscriber(const ros::Publisher& publisher)
 {
   return publisher.getNumSubscribers() > 0;
-}
-
-/// The master lists `topic` as published.
-bool
-advertised(const std::string& topic)
-{
-  ros::master::V_TopicInfo topics;
-  ros::master::getTopics(topics);
-  for (const auto& t : topics)
-    if (t.name == topic)
-      return true;
-  return false;
 }
 
 TEST(RosNode, TwoInstancesInOneNamespaceSubscribeOnlyWhileTheirOutputIsWanted)

@@ -50,7 +50,8 @@ xyzFromBlob(const LoadedCloud& cloud, const std::string& path);
 void
 writeXyzToBlob(const pcl::PointCloud<pcl::PointXYZ>& xyz, pcl::PCLPointCloud2& blob);
 
-/// Saves binary PCD (the bytes PCL's PCDWriter::writeBinary writes) with write(2), every return
+/// Saves binary PCD (the bytes PCL's PCDWriter::writeBinary writes for the blob with its fields
+/// packed: no padding, so no `_` fields that PCL's converters cannot read) with write(2), every return
 /// checked: to a temporary name in the same directory (temporaryPrefix), fsynced and renamed into place, so no
 /// half-written file ever carries the final name and a full disk gives an error, never SIGBUS.
 /// A symbolic link is followed (its target is replaced, the link stays); a character device

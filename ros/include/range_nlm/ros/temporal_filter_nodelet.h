@@ -11,7 +11,9 @@
 ///     publishes `~depth_filtered/image` and `~depth_filtered/camera_info`.
 /// With the hole filling on (~fill_holes > 0), `~filled/mask` (sensor_msgs/Image, mono8, stamped
 /// as the output: 255 where a point was filled, 0 where it was measured) is published for every
-/// output while it has subscribers.
+/// output while it has subscribers; with ~uncertainty on, `~uncertainty/image` (32FC1) likewise.
+/// Each of the two is advertised only while its feature is on (dynamic_reconfigure turning it on
+/// or off advertises or withdraws it).
 /// The input is subscribed only while someone subscribes to the output.
 /// Parameters (private): node_settings.h; a missing, misspelt or invalid one makes onInit throw,
 /// so that `nodelet load` fails. Live changes: parameter_reconfigure.h. Diagnostics on
@@ -55,6 +57,9 @@ private:
   /// Throws std::invalid_argument if ~image_transport names no installed plugin.
   void checkTransport() const;
   void advertise();
+  /// Advertises ~uncertainty/image and ~filled/mask while their features are on, withdraws them
+  /// while off. Called with stream_mutex_ held.
+  void advertiseOptionalTopics();
   /// Subscribes the input when the output gains its first subscriber and unsubscribes it (and
   /// restarts the window) when the last one leaves.
   void onConnectionChange();
