@@ -244,7 +244,8 @@ private:
     report_.frames.push_back({name, 0.0, ""});
     std::vector<TaggedStream<Pending>::Output> ready;
     try {
-      const Cloud::Ptr cloud = cloudFromPointCloud2(*message);
+      // Refused for the windows before it is decoded, as the nodelet does.
+      const Cloud::Ptr cloud = cloudFromPointCloud2(*message, &options_.settings.parameters);
       ready = stream_->push(cloud, Pending{message, m.getTime(), m.getConnectionHeader(), report_.frames.size() - 1});
     } catch (const std::invalid_argument& e) { // InvalidMessage, or the filter refused the frame
       report_.frames.pop_back();
