@@ -262,9 +262,7 @@ addOption(po::options_description& options, const ParameterEntry& entry)
         if constexpr (std::is_enum_v<T>) {
           options.add_options()(entry.cli_option, po::value<std::string>(), help.c_str());
         } else if constexpr (std::is_same_v<T, std::uint64_t>) {
-          auto* value = po::value<Unsigned64>();
-          if (entry.cli_always)
-            value = unsigned64Value(d.*member);
+          auto* value = entry.cli_always ? unsigned64Value(d.*member) : po::value<Unsigned64>();
           options.add_options()(entry.cli_option, value, help.c_str());
         } else {
           auto* value = po::value<T>();
