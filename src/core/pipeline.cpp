@@ -307,25 +307,9 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   // used, each with a sample of its own.
   workspace.profiled = given[center];
   workspace.current_profile = NoiseProfile();
-  workspace.known_dilation = 0;
-  workspace.chosen_dilation = 0;
-  workspace.run.estimates_reused = false;
-  // A stream's frames share their sensor: its estimates are carried while a sparse check of each
-  // frame agrees with the frame they were made on (FilterParameters::reuse_estimates).
-  detail::EstimateSignature signature;
-  const bool carry = parameters.reuse_estimates && given[center]->countValid() > 0;
-  if (carry) {
-    signature = detail::estimateSignature(*given[center], viewpoint, workspace.signature_scratch);
-    detail::CarriedEstimates& carried = workspace.estimates;
-    if (detail::carriedEstimatesHold(carried, signature, *given[center], parameters)) {
-      workspace.current_profile = carried.profile;
-      workspace.known_dilation = carried.dilation;
-      workspace.run.estimates_reused = true;
-      ++carried.frames;
-    }
-  } else {
-    workspace.estimates = detail::CarriedEstimates();
-  }
+  // A stream's frames share their sensor (FilterParameters::reuse_estimates).
+  const detail::EstimateSignature signature =
+      detail::takeCarriedEstimates(*given[center], parameters, viewpoint, workspace);
   if (parameters.outlier_sigmas > 0.0f && given[center]->countValid() > 0) {
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::outliers);
@@ -352,16 +336,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     detail::runMultiscale(frames, center, parameters, viewpoint, active, workspace, scales);
   else
     detail::runOneScale(frames, center, parameters, viewpoint, active, workspace);
-  if (carry && !workspace.run.estimates_reused) {
-    detail::CarriedEstimates& carried = workspace.estimates;
-    carried.valid = true;
-    carried.signature = signature;
-    carried.parameters = parameters;
-    carried.profile = workspace.current_profile;
-    carried.dilation = workspace.chosen_dilation;
-    carried.frames = 1;
-  }
-  workspace.known_dilation = 0;
+  detail::keepEstimates(signature, parameters, workspace);
   // After the last pass, so that the holes' borders are compared and carried over denoised.
   workspace.run.filled.clear();
   if (parameters.fill_holes > 0) {

@@ -177,5 +177,42 @@ carriedEstimatesHold(const CarriedEstimates& carried, const EstimateSignature& n
   return double(outside) <= allowed * n;
 }
 
+EstimateSignature
+takeCarriedEstimates(const Grid& frame, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                     Workspace& workspace)
+{
+  workspace.known_dilation = 0;
+  workspace.chosen_dilation = 0;
+  workspace.run.estimates_reused = false;
+  if (!parameters.reuse_estimates || frame.countValid() == 0) {
+    workspace.estimates = CarriedEstimates();
+    return EstimateSignature();
+  }
+  const EstimateSignature signature = estimateSignature(frame, viewpoint, workspace.signature_scratch);
+  CarriedEstimates& carried = workspace.estimates;
+  if (carriedEstimatesHold(carried, signature, frame, parameters)) {
+    workspace.current_profile = carried.profile;
+    workspace.known_dilation = carried.dilation;
+    workspace.run.estimates_reused = true;
+    ++carried.frames;
+  }
+  return signature;
+}
+
+void
+keepEstimates(const EstimateSignature& signature, const FilterParameters& parameters, Workspace& workspace)
+{
+  workspace.known_dilation = 0;
+  if (signature.width == 0 || workspace.run.estimates_reused)
+    return;
+  CarriedEstimates& carried = workspace.estimates;
+  carried.valid = true;
+  carried.signature = signature;
+  carried.parameters = parameters;
+  carried.profile = workspace.current_profile;
+  carried.dilation = workspace.chosen_dilation;
+  carried.frames = 1;
+}
+
 } // namespace detail
 } // namespace range_nlm

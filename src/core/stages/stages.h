@@ -13,6 +13,22 @@ namespace detail
 
 // Once per call, on the frames as given (runFilter).
 
+/// FilterParameters::reuse_estimates, at the start of a call: the signature of `frame` (empty
+/// with reuse off or no valid point), and where the carried estimates still hold, the noise
+/// profile in workspace.current_profile and the dilation in workspace.known_dilation
+/// (workspace.run.estimates_reused set). With reuse off, or a frame without a valid point, the
+/// carried estimates are dropped.
+/// (carried_estimates.cpp)
+EstimateSignature
+takeCarriedEstimates(const Grid& frame, const FilterParameters& parameters, const Viewpoint& viewpoint,
+                     Workspace& workspace);
+
+/// At the end of a call: keeps the estimates the call made (its profile and automatic dilation)
+/// with `signature` for the next frames, unless it reused carried ones or has no signature.
+/// (carried_estimates.cpp)
+void
+keepEstimates(const EstimateSignature& signature, const FilterParameters& parameters, Workspace& workspace);
+
 /// The signature of `frame` (`scratch` holds its samples). (carried_estimates.cpp)
 EstimateSignature
 estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float>& scratch);
