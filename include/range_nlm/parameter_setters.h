@@ -20,6 +20,9 @@ public:
   /// S, side of the search window, odd, pixels (default 9; paper preset 7).
   void setSearchWindowSize(int s) { parameters_.search_window = s; }
   int getSearchWindowSize() const { return parameters_.search_window; }
+  /// See FilterParameters::temporal_search_window.
+  void setTemporalSearchWindowSize(int s) { parameters_.temporal_search_window = s; }
+  int getTemporalSearchWindowSize() const { return parameters_.temporal_search_window; }
   /// P, side of the similarity patch, odd, pixels (default 3; paper preset 5).
   void setPatchSize(int p) { parameters_.patch_size = p; }
   int getPatchSize() const { return parameters_.patch_size; }

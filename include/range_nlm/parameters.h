@@ -96,6 +96,12 @@ struct FilterParameters
   /// P: side of the square similarity patch, pixels. Odd, >= 1, no larger than the cloud.
   /// Default 3 (paper: 5); a small patch keeps points next to an edge similar to their own side.
   int patch_size = 3;
+  /// Side of the search window in the other frames of a temporal window (a stream's history or
+  /// neighbour frames), pixels: odd; 0, or search_window and wider, = search_window. The current frame
+  /// keeps search_window; a neighbour's candidates near i are the same surface seen again, so a
+  /// small window there keeps most of the temporal averaging at a fraction of the cost
+  /// (docs/method.md, "The live preset"). Default 0 (live: 3).
+  int temporal_search_window = 0;
   /// Spacing of the pixels of the search window and of the patches (a dilated window): the
   /// candidates of p_(u,v) are p_(u + a k, v + b k) for |a|, |b| <= S / 2, and the patch offsets
   /// are multiples of k, so that with spatially correlated noise the window reaches past the

@@ -42,7 +42,8 @@ restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint
 
 void
 updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* start, const Viewpoint& viewpoint,
-                     int max_count, int search_window, int samples, std::uint64_t seed, int threads)
+                     int max_count, int search_window, int samples, std::uint64_t seed, int threads,
+                     const NoiseProfile* known)
 {
   if (start && (start->width != frame.width || start->height != frame.height))
     throw std::invalid_argument("range_nlm: the filtered frame that starts the history is " +
@@ -66,14 +67,17 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   std::vector<float> rho_f, rho_h;
   detail::rangesOf(frame, viewpoint, threads, rho_f);
   detail::rangesOf(history.average, viewpoint, threads, rho_h);
-  NoiseProfile profile;
-  try {
-    profile = detail::estimateNoiseProfile(frame, search_window, samples, seed, viewpoint, threads);
-  } catch (const UnfilterableFrame&) {
-    // Too few points to tell noise from change (a nearly covered lens): start over from the frame.
-    restart(history, frame, start, started);
-    return;
+  NoiseProfile estimated;
+  if (!known || known->empty()) {
+    try {
+      estimated = detail::estimateNoiseProfile(frame, search_window, samples, seed, viewpoint, threads);
+    } catch (const UnfilterableFrame&) {
+      // Too few points to tell noise from change (a nearly covered lens): start over from the frame.
+      restart(history, frame, start, started);
+      return;
+    }
   }
+  const NoiseProfile& profile = known && !known->empty() ? *known : estimated;
   std::vector<float> sigma(n);
   detail::interpolateProfile(profile.range, profile.sigma, rho_f.data(), sigma.data(), n);
   // Differences to the history levelled to the frame (NaN where either has no point), and the

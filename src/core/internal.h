@@ -163,6 +163,10 @@ copyGrid(const Grid& from, Grid& to, int threads);
 /// Thread count for OpenMP: `threads` if > 0, else the runtime's default (1 without OpenMP).
 int
 resolveThreads(int threads);
+/// The smaller search window some frames name (FrameTerm::search_window; computeOffsets allows one
+/// such size), else search_window.
+int
+innerSearch(const std::vector<FrameTerm>& frames, int search_window);
 /// The literal evaluation of the offsets (Evaluation::direct).
 void
 computeOffsetsDirect(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,

@@ -13,6 +13,15 @@ namespace range_nlm
 namespace detail
 {
 
+int
+innerSearch(const std::vector<FrameTerm>& frames, int search_window)
+{
+  for (const FrameTerm& term : frames)
+    if (term.search_window > 0 && term.search_window < search_window)
+      return term.search_window;
+  return search_window;
+}
+
 void
 computeOffsetsDirect(const Grid& center, const NormalField& normals,
                      const std::vector<FrameTerm>& frames, int search_window, int patch_size,
@@ -21,7 +30,6 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
 {
   const int width = center.width;
   const int height = center.height;
-  const int r = search_window / 2;
   if (spread) {
     spread->variance.resize(center.size());
     spread->inverse_count.resize(center.size());
@@ -43,7 +51,19 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
       const bool gated = !patch_gate.empty();
       const double gate = gated ? patch_gate[i] : 0.0;
       double num = 0.0, den = 0.0, num2 = 0.0, den2 = 0.0; // and sum w h^2, sum w^2
+      // The frames searched over a smaller window (FrameTerm::search_window) are summed apart and
+      // scaled by the centre frame's weight over the whole window relative to its weight over
+      // that inner one (the windowed kernel's rule).
+      double inner_num = 0.0, inner_den = 0.0, inner_num2 = 0.0, inner_den2 = 0.0;
+      double centre_den = 0.0, centre_inner_den = 0.0;
+      bool centre_seen = false;
+      const int inner_r = innerSearch(frames, search_window) / 2;
       for (const FrameTerm& term : frames) {
+        const int r = (term.search_window > 0 ? term.search_window : search_window) / 2;
+        const bool inner_term = r < search_window / 2;
+        const bool centre_term = !inner_term && term.grid == &center && inner_r < search_window / 2;
+        centre_seen = centre_seen || centre_term;
+        double term_num = 0.0, term_den = 0.0, term_num2 = 0.0, term_den2 = 0.0, term_inner_den = 0.0;
         const Grid& g = *term.grid;
         const Grid& c = term.patches ? *term.patches : center; // the centre patch's grid
         const float inv_d2 = term.inverse_distance2 ? (*term.inverse_distance2)[i]
@@ -84,13 +104,30 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
             const double dist2 = dx * dx + dy * dy + dz * dz;
             const double h = dx * nx + dy * ny + dz * nz;
             const float arg = static_cast<float>(-(dist2 * inv_d2 + sim * inv_s2));
-            const double w = term.weight * expNonPositiveInline(arg);
-            num += w * h;
-            den += w;
-            num2 += w * h * h;
-            den2 += w * w;
+            const double w = expNonPositiveInline(arg);
+            term_num += w * h;
+            term_den += w;
+            term_num2 += w * h * h;
+            term_den2 += w * w;
+            if (centre_term && std::abs(jv - v) <= inner_r && std::abs(ju - u) <= inner_r)
+              term_inner_den += w;
           }
         }
+        const double psi = term.weight;
+        if (inner_term) {
+          inner_num += psi * term_num, inner_den += psi * term_den;
+          inner_num2 += psi * term_num2, inner_den2 += psi * psi * term_den2;
+          continue;
+        }
+        if (centre_term)
+          centre_den = term_den, centre_inner_den = term_inner_den;
+        num += psi * term_num, den += psi * term_den;
+        num2 += psi * term_num2, den2 += psi * psi * term_den2;
+      }
+      if (inner_r < search_window / 2) {
+        const double scale = centre_seen && centre_inner_den > 0.0 ? centre_den / centre_inner_den : 1.0;
+        num += scale * inner_num, den += scale * inner_den;
+        num2 += scale * inner_num2, den2 += scale * inner_den2;
       }
       offsets[i] = den > 0.0 ? static_cast<float>(num / den) : 0.0f;
       if (spread && den > 0.0) {

@@ -180,6 +180,7 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
       w.patch_z = guide.z;
     }
     w.psi = term.weight;
+    w.search = term.search_window;
     w.d2 = inverseSquare(term.distance_bandwidth);
     w.s2 = inverseSquare(term.similarity_bandwidth);
   }
@@ -206,6 +207,8 @@ computeOffsetsWindowed(const RowKernels& kernels, const Grid& center, const Norm
     task.center = padded_center.plane();
     task.frames = row_planes.data();
     task.frame_count = static_cast<int>(frame_count);
+    const int inner = innerSearch(frames, search_window);
+    task.inner_search = inner < search_window ? inner : 0;
     task.nx = field(0);
     task.ny = field(1);
     task.nz = field(2);

@@ -164,6 +164,14 @@ windowAndBandwidthEntries()
              "more than any detail the filter keeps")
       .help("P, odd side of the similarity patch in pixels")
       .cli("patch").ros("patch").pass("patch"),
+    Entry("temporal_search_window", &P::temporal_search_window).unit("pixels").zeroMeans("search_window")
+      .range(zeroOr(oddBetween(1, 101, "must be 0 (the search window) or a positive odd number of pixels, at most "
+                                       "101")),
+             kWindowCost)
+      .docs("[the live preset](#the-live-preset)")
+      .help("odd side of the search window in the other frames of a temporal window (a stream's history or "
+            "neighbours); 0 (or the search window and wider) = the search window")
+      .cli("temporal-search-window").ros("temporal_search_window").pass("temporal_search"),
     Entry("dilation", &P::dilation).unit("pixels").zeroMeans("automatic")
       .range(between(0, 64, "must be 0 (automatic) ... 64"),
              "a frame is filtered as k^2 phases 1/k of its size, each of which must hold the windows: 64 leaves a "

@@ -72,10 +72,12 @@ FilterParameters::live()
 {
   // One pass with the default's 7x7 gated normals on a 7x7 pre-smoothed copy (5x5 windows lose
   // most of the lead over FastBilateralFilter at strong noise; docs/method.md, "The live preset"),
-  // and the sensor's estimates carried from frame to frame in a stream.
+  // the sensor's estimates carried from frame to frame in a stream, and a 3x3 search in a
+  // stream's history (its weight scaled to stand for the whole window).
   FilterParameters p;
   p.iterations = 1;
   p.reuse_estimates = true;
+  p.temporal_search_window = 3;
   return p;
 }
 

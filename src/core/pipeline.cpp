@@ -62,6 +62,17 @@ detail::computeOffsets(const Grid& center, const NormalField& normals, const std
     if (term.grid == nullptr || term.grid->width != center.width || term.grid->height != center.height ||
         (term.patches && (term.patches->width != center.width || term.patches->height != center.height)))
       throw std::invalid_argument("range_nlm: every frame (and patch guide) must have the size of the filtered frame");
+  const int inner = detail::innerSearch(frames, search_window);
+  for (const FrameTerm& term : frames)
+    if (term.search_window < 0 || term.search_window > search_window ||
+        (term.search_window > 0 && term.search_window % 2 == 0) ||
+        (term.search_window > 0 && term.search_window != search_window && term.search_window != inner)) {
+      std::ostringstream msg;
+      msg << "range_nlm: a frame's search window " << term.search_window
+          << " must be 0 (the search window) or odd and at most the search window " << search_window
+          << ", and the frames may name one smaller window only";
+      throw std::invalid_argument(msg.str());
+    }
   if (!active.empty() && active.size() != center.size())
     throw std::invalid_argument("range_nlm: the active mask must have one entry per point");
   if (!patch_gate.empty() && patch_gate.size() != center.size())
@@ -206,14 +217,20 @@ checkFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
 void
 checkCoordinateScale(const Grid& frame)
 {
-  float largest = 0.0f;
-  bool any = false;
-  const std::size_t n = frame.size();
-  for (std::size_t i = 0; i < n; ++i)
-    if (frame.valid[i]) {
-      any = true;
-      largest = std::max({largest, std::fabs(frame.x[i]), std::fabs(frame.y[i]), std::fabs(frame.z[i])});
-    }
+  // The largest magnitude over the valid points, -1 if there is none (a select per point, so that
+  // the scan vectorizes: it runs on every frame of a stream).
+  float largest = -1.0f;
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(frame.size());
+  const float* __restrict x = frame.x.data();
+  const float* __restrict y = frame.y.data();
+  const float* __restrict z = frame.z.data();
+  const unsigned char* __restrict valid = frame.valid.data();
+#pragma omp simd reduction(max : largest)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const float m = std::max(std::max(std::fabs(x[i]), std::fabs(y[i])), std::fabs(z[i]));
+    largest = std::max(largest, valid[i] ? m : -1.0f);
+  }
+  const bool any = largest >= 0.0f;
   if (!any || (largest >= kSmallestLargestCoordinate && largest <= kLargestCoordinate))
     return; // a frame without a valid point is reported as such
   std::ostringstream msg;

@@ -32,6 +32,12 @@ FilterWorkspace::result() const
   return workspace_->run;
 }
 
+const NoiseProfile&
+FilterWorkspace::currentProfile() const
+{
+  return workspace_->current_profile;
+}
+
 std::vector<Grid>&
 FilterWorkspace::inputs()
 {

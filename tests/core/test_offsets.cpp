@@ -109,6 +109,105 @@ TEST(Kernel, FastMatchesDirectOnAWideFrameWithPerPointBandwidths)
   EXPECT_LT(maxDifference(fast, direct), 2e-6);
 }
 
+// A frame searched over a smaller window (FrameTerm::search_window, a stream's history) gives the
+// literal rule in every build: its sums scaled by the centre frame's weight over the whole window
+// relative to the inner one, with holes, per-point bandwidths, the patch gate and the spread.
+TEST(Kernel, FramesWithASmallerSearchWindowMatchDirectInEveryBuild)
+{
+  const Viewpoint origin{0, 0, 0};
+  const std::vector<const detail::RowKernels*> builds = detail::supportedRowKernels();
+  for (int holes = 0; holes < 2; ++holes) {
+    const int w = 37, h = 23;
+    const Grid a = randomSurface(w, h, holes ? 0.12 : 0.0, 60), b = randomSurface(w, h, holes ? 0.12 : 0.0, 61);
+    const NormalField normals = estimateNormals(b, 3, origin, 1);
+    std::vector<float> inv_d2(b.size()), gate(b.size());
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      inv_d2[i] = 1.0f / std::pow(0.015f + 0.00003f * float(i % 97), 2.0f);
+      gate[i] = 0.01f + 0.0001f * float(i % 13);
+    }
+    FrameTerm centre{&b, 0.0f, 0.004f, 1.0f};
+    centre.inverse_distance2 = &inv_d2;
+    for (int search : {5, 9})
+      for (int inner : {1, 3, 5})
+        for (int patch : {1, 3, 5, 13}) {
+          if (inner > search)
+            continue;
+          FrameTerm history{&a, 0.03f, 0.005f, 0.6f};
+          history.search_window = inner;
+          const std::vector<FrameTerm> terms{history, centre};
+          std::vector<float> direct, fast;
+          detail::OffsetSpread direct_spread, fast_spread;
+          detail::computeOffsets(b, normals, terms, search, patch, Evaluation::direct, 2, {}, direct, gate, nullptr,
+                                 &direct_spread);
+          for (std::size_t k = 0; k < builds.size(); ++k) {
+            fast.assign(b.size(), -1.0f);
+            detail::computeOffsetsWindowed(*builds[k], b, normals, terms, search, patch, 2, {}, fast, gate, nullptr,
+                                           &fast_spread);
+            const std::string what = "build " + std::to_string(k) + " holes " + std::to_string(holes) + " search " +
+                                     std::to_string(search) + " inner " + std::to_string(inner) + " patch " +
+                                     std::to_string(patch);
+            EXPECT_LT(maxDifference(fast, direct), 2e-6) << what;
+            EXPECT_LT(maxDifference(fast_spread.inverse_count, direct_spread.inverse_count), 2e-5) << what;
+          }
+        }
+  }
+}
+
+// The scale is the centre frame's weight over its whole window relative to the inner one: a copy
+// of the frame searched over its co-located pixel only (inner window 1, height 0, weight 1, scaled
+// to the centre frame's whole weight) halves every offset, as if it held the weight of the whole
+// window at height 0. Naming the search window itself changes nothing.
+TEST(Kernel, AFrameSearchedOverASmallerWindowStandsForItsWholeWindow)
+{
+  const Viewpoint origin{0, 0, 0};
+  const Grid b = randomSurface(29, 21, 0.0, 70);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  const FrameTerm centre{&b, 0.02f, 0.004f, 1.0f};
+  std::vector<float> single, with_copy;
+  computeOffsets(b, normals, {centre}, 7, 3, Evaluation::fast, 2, {}, single);
+  FrameTerm copy = centre;
+  copy.search_window = 1;
+  computeOffsets(b, normals, {copy, centre}, 7, 3, Evaluation::fast, 2, {}, with_copy);
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    EXPECT_NEAR(with_copy[i], 0.5f * single[i], 1e-6f + 1e-5f * std::fabs(single[i])) << i;
+    moved += std::fabs(single[i]) > 1e-4f;
+  }
+  EXPECT_GT(moved, b.size() / 4);
+  const Grid a = randomSurface(29, 21, 0.1, 71);
+  FrameTerm other{&a, 0.03f, 0.005f, 0.5f};
+  std::vector<float> whole, named;
+  computeOffsets(b, normals, {other, centre}, 7, 3, Evaluation::fast, 2, {}, whole);
+  other.search_window = 7;
+  computeOffsets(b, normals, {other, centre}, 7, 3, Evaluation::fast, 2, {}, named);
+  EXPECT_EQ(maxDifference(whole, named), 0.0);
+}
+
+TEST(Kernel, FrameSearchWindowsAreChecked)
+{
+  const Viewpoint origin{0, 0, 0};
+  const Grid a = randomSurface(15, 11, 0.0, 80), b = randomSurface(15, 11, 0.0, 81), c = randomSurface(15, 11, 0.0, 82);
+  const NormalField normals = estimateNormals(b, 3, origin, 1);
+  std::vector<float> out;
+  for (int bad : {-1, 4, 9}) {
+    FrameTerm other{&a, 0.03f, 0.005f, 0.5f};
+    other.search_window = bad;
+    try {
+      computeOffsets(b, normals, {other, FrameTerm{&b, 0.02f, 0.004f, 1.0f}}, 7, 3, Evaluation::fast, 1, {}, out);
+      ADD_FAILURE() << "search window " << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("search window " + std::to_string(bad)), std::string::npos) << e.what();
+    }
+  }
+  // Two different smaller windows: the rule scales one.
+  FrameTerm three{&a, 0.03f, 0.005f, 0.5f}, five{&c, 0.03f, 0.005f, 0.5f};
+  three.search_window = 3;
+  five.search_window = 5;
+  EXPECT_THROW(computeOffsets(b, normals, {three, FrameTerm{&b, 0.02f, 0.004f, 1.0f}, five}, 7, 3, Evaluation::fast,
+                              1, {}, out),
+               std::invalid_argument);
+}
+
 TEST(Kernel, EveryInstructionSetBuildMatchesDirect)
 {
   // The baseline, AVX2 and AVX-512 builds this CPU runs (computeOffsets takes only the fastest),

@@ -35,6 +35,7 @@ accessors()
 {
   static const std::map<std::string, Accessors> all = {
       RANGE_NLM_ACCESSORS(search_window, SearchWindowSize),
+      RANGE_NLM_ACCESSORS(temporal_search_window, TemporalSearchWindowSize),
       RANGE_NLM_ACCESSORS(patch_size, PatchSize),
       RANGE_NLM_ACCESSORS(dilation, Dilation),
       RANGE_NLM_ACCESSORS(scales, Scales),

@@ -115,6 +115,23 @@ TEST(Parameters, WindowLargerThanCloudIsRejected)
   EXPECT_EQ(messageOf(p, 9, 9), "");
 }
 
+// The other frames' search window: 0 (the search window) or odd; live searches a stream's history
+// over 3 x 3.
+TEST(Parameters, TemporalSearchWindowIsOddOrZero)
+{
+  FilterParameters p;
+  EXPECT_EQ(p.temporal_search_window, 0);
+  EXPECT_EQ(FilterParameters::live().temporal_search_window, 3);
+  for (int good : {0, 1, 3, 9, 11}) {
+    p.temporal_search_window = good;
+    EXPECT_EQ(messageOf(p), "") << good;
+  }
+  p.temporal_search_window = 4;
+  EXPECT_NE(messageOf(p).find("temporal_search_window = 4"), std::string::npos) << messageOf(p);
+  p.temporal_search_window = -1;
+  EXPECT_NE(messageOf(p).find("temporal_search_window = -1"), std::string::npos) << messageOf(p);
+}
+
 TEST(Parameters, Presets)
 {
   EXPECT_EQ(FilterParameters::preset("paper").normal_window, 3);

@@ -13,7 +13,7 @@ namespace test
 {
 
 /// `p` with the entry's field set to a valid value other than its own: integers + 2 (odd stays
-/// odd), numbers + 0.5 (fractional where the value is whole), seeds + 2, booleans negated,
+/// odd; the 0 of a field that is odd or 0 becomes 3), numbers + 0.5 (fractional where the value is whole), seeds + 2, booleans negated,
 /// enumerators the first other name.
 inline FilterParameters
 withOtherValue(const ParameterEntry& entry, FilterParameters p)
@@ -31,6 +31,8 @@ withOtherValue(const ParameterEntry& entry, FilterParameters p)
           p.*member = !(p.*member);
         } else if constexpr (std::is_floating_point_v<T>) {
           p.*member = p.*member + 0.5f <= entry.range.max ? p.*member + 0.5f : p.*member - 0.25f;
+        } else if (entry.range.odd && p.*member == 0) {
+          p.*member = 3;
         } else {
           p.*member = p.*member + 2;
         }

@@ -209,12 +209,14 @@ struct RunningAverage
 /// differences to it where that is above 1 (spatially correlated noise). A pixel starts over
 /// from start's point, counted as max_count - 1 frames (so that the next frames come in with
 /// weight 1 / max_count), or from the frame's point, counted as 1, where start has none. The
-/// profile is estimateNoiseProfile(frame, search_window, samples, seed). By `threads` threads (0 =
-/// OpenMP's default), with the same result. Throws std::invalid_argument if start's size is not
-/// the frame's.
+/// profile is `profile` if given (the one the filter used for the frame, so that a frame's noise is
+/// estimated once), else estimateNoiseProfile(frame, search_window, samples, seed). By `threads`
+/// threads (0 = OpenMP's default), with the same result. Throws std::invalid_argument if start's
+/// size is not the frame's.
 void
 updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* start, const Viewpoint& viewpoint,
-                     int max_count, int search_window, int samples, std::uint64_t seed, int threads);
+                     int max_count, int search_window, int samples, std::uint64_t seed, int threads,
+                     const NoiseProfile* profile = nullptr);
 
 /// How much larger the frame-to-frame noise of frame `b` is than its spatial noise profile says:
 /// 1.4826 x the median, over the pixels valid in both frames with a normal, of
@@ -283,6 +285,9 @@ struct FrameTerm
   const std::vector<float>* inverse_distance2 = nullptr;
   const std::vector<float>* inverse_similarity2 = nullptr;
   const Grid* patches = nullptr;
+  /// The side of this frame's search window N_k(i), odd and at most computeOffsets' search_window;
+  /// 0: search_window (FilterParameters::temporal_search_window for the other frames of a window).
+  int search_window = 0;
 };
 
 /// Computes for every point i of `center` the filtered normal offset
@@ -417,6 +422,10 @@ public:
 
   /// The last run's result.
   const FilterRun& result() const;
+  /// The noise profile of the last run's current frame as that run estimated it (or carried it,
+  /// FilterParameters::reuse_estimates); empty if the run used none (global bandwidths without the
+  /// outlier stage) or failed before estimating it.
+  const NoiseProfile& currentProfile() const;
   /// Grids for the input frames (the pcl::Filter adaptors convert their clouds into them): a run
   /// whose current frame is one of them takes that grid over as the result's storage instead of
   /// copying it (its contents are not kept), unless another frame is the same grid.

@@ -44,6 +44,9 @@ struct WindowPlane
   const float* patch_x = nullptr;
   const float* patch_y = nullptr;
   const float* patch_z = nullptr;
+  /// The frame's own search window (FrameTerm::search_window), odd and at most WindowTask::search;
+  /// 0: WindowTask::search.
+  int search = 0;
 };
 
 /// Everything one row of the windowed evaluation reads. The per-pixel arrays hold the row's
@@ -58,6 +61,10 @@ struct WindowTask
   WindowPlane center;        // the filtered frame (its patches)
   const WindowPlane* frames = nullptr;
   int frame_count = 0;
+  /// The one smaller search window the other frames may have (WindowPlane::search), 0 if none:
+  /// their sums are scaled by the centre frame's weight over `search` relative to its weight over
+  /// this inner window (see window_row_p).
+  int inner_search = 0;
   /// The patch gate of the row's pixels (FilterParameters::patch_edge_gate): centre patch pixels
   /// with |a(o)| above it count as holes. Null: no gate.
   const float* gate = nullptr;

@@ -173,6 +173,9 @@ detail::buildFrameTerms(FrameContext& ctx)
     const Bandwidths& b = ctx.bandwidths[k];
     ctx.weights[k] = temporalDistanceWeight(k, ctx.center) * temporalNoiseWeight(b.similarity, s_max);
     FrameTerm term{k == ctx.center ? &ctx.current() : ctx.frames[k], b.distance, b.similarity, ctx.weights[k]};
+    // (A temporal search window as wide as the search window or wider is the search window.)
+    if (k != ctx.center && ctx.parameters.temporal_search_window < ctx.parameters.search_window)
+      term.search_window = ctx.parameters.temporal_search_window;
     if (ctx.adaptive)
       addBandwidthMaps(ctx, k, term);
     ctx.terms.push_back(term);
