@@ -2,7 +2,7 @@
 // started with rosrun under use_sim_time, and the sample bag the build made of data/kinect-sequence
 // played with `rosbag play --clock`. The node filters the bag's clouds, its diagnostics report a
 // latency measured on the bag's clock (not the wall clock the stamps of 1 s are decades behind),
-// and the topics of the features that are off are not advertised.
+// also after that clock stops, and the topics of the features that are off are not advertised.
 #include "ros_test_support.h"
 
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -164,6 +164,10 @@ TEST(RosSampleBag, PlayedWithItsClockTheNodeReportsALatencyOnThatClockAndNoOptio
   EXPECT_TRUE(std::isfinite(median_ms) && median_ms >= 0.0 && median_ms < 10000.0) << median;
   EXPECT_TRUE(std::isfinite(p95_ms) && p95_ms >= median_ms && p95_ms < 10000.0) << p95;
   EXPECT_EQ(off_clock, "0");
+  // The bag has ended and its clock stands still: the status still comes once a (wall) second.
+  while (diagnostics.next(0.0))
+    ;
+  EXPECT_TRUE(diagnostics.next(3.0)) << "no diagnostics after the bag's clock stopped\n" << readLog(node.log());
 
   EXPECT_TRUE(advertised("/rnlm_bag/output"));
   EXPECT_FALSE(advertised("/rnlm_bag/uncertainty/image"));
