@@ -64,11 +64,18 @@ checkedArray(const py::handle& value, const char* what, int ndim, py::ssize_t la
     throw py::value_error("range_nlm: " + std::string(what) + " must be " + layout + ", got shape " + shapeText(a));
   const char type = a.dtype().char_();
   const bool native = a.dtype().attr("isnative").cast<bool>();
-  if (types.find(type) == std::string::npos)
+  if (types.find(type) == std::string::npos) {
+    const char kind = a.dtype().kind();
+    // Integers other than uint16 for a depth image: raw sensor units or metres cannot be told.
+    const bool depth_integers = types.find('H') != std::string::npos && (kind == 'i' || kind == 'u' || kind == 'b');
     throw py::type_error("range_nlm: " + std::string(what) + " must be " + type_names + ", got " +
                          py::str(a.dtype()).cast<std::string>() +
                          (py::isinstance<py::array>(value) ? "" : " (the array numpy makes of the " + typeName(value) +
-                                                                      ")"));
+                                                                      ")") +
+                         (depth_integers ? "; give numpy.asarray(depth, dtype=numpy.uint16) for raw sensor values, "
+                                           "floats for metres"
+                                         : ""));
+  }
   if (!native || !(a.flags() & py::array::c_style) || !(a.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_))
     a = numpy.attr("ascontiguousarray")(a, a.dtype().attr("newbyteorder")("="));
   return a;
@@ -141,8 +148,7 @@ Cloud::Ptr
 cloudFromDepth(const py::handle& depth, const DepthIntrinsics& intrinsics, double depth_scale, bool depth_output,
                FrameFormat& format, const char* what)
 {
-  const py::array a = checkedArray(depth, what, 2, 0, "an H x W depth image", "Hfd",
-                                   "uint16 (numpy.asarray(..., dtype=numpy.uint16) for raw values), float32 or float64");
+  const py::array a = checkedArray(depth, what, 2, 0, "an H x W depth image", "Hfd", "uint16, float32 or float64");
   DepthIntrinsics scaled = intrinsics;
   scaled.depth_scale = depth_scale;
   format.depth = true;
