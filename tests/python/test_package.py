@@ -95,3 +95,15 @@ def test_reprs_say_what_the_objects_hold():
         "range_nlm.Intrinsics(fx=500.0, fy=501.0, cx=320.0, cy=240.0, depth_scale=5000.0, width=640, height=480)")
     p = range_nlm.Parameters(search_window=7)
     assert repr(p).startswith("range_nlm.Parameters(") and "search_window=7" in repr(p)
+
+
+def test_a_depth_list_without_intrinsics_warns_too(fresh_warning):
+    depth = (_depth() / 5000.0).tolist()  # metres, as floats
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        range_nlm.denoise_depth(depth, **SMALL)
+        range_nlm.denoise_depth(depth, **SMALL)
+    warned = [w for w in caught if issubclass(w.category, UserWarning)]
+    assert len(warned) == 1 and "default intrinsics" in str(warned[0].message)
+    # Depth scale 1 for floats: the CLI's "depth-scale 5000" applies to 16-bit images only.
+    assert "depth-scale" not in str(warned[0].message)
