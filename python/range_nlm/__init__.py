@@ -130,8 +130,8 @@ def _default_intrinsics(caller, depth, depth_scale):
         if depth_scale is None and dtype.kind == "u":
             defaults += ", depth-scale %g" % intrinsics.depth_scale
         _warnings.warn("range_nlm: %s: this and any other depth image without intrinsics are read with default "
-                      "intrinsics (%s: a 640 x 480 Kinect v1 / TUM RGB-D camera); give intrinsics= for your camera, "
-                      "or the depths and positions are wrong" % (caller, defaults), UserWarning, stacklevel=3)
+                       "intrinsics (%s: a 640 x 480 Kinect v1 / TUM RGB-D camera); give intrinsics= for your camera, "
+                       "or the depths and positions are wrong" % (caller, defaults), UserWarning, stacklevel=3)
     return intrinsics
 
 
