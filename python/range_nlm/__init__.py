@@ -12,11 +12,13 @@ name with ``_`` for ``-`` works too: ``patch``, ``patch_gate``, ``cross_frame``)
 range_nlm_denoise's. See docs/python.md.
 """
 
-import operator
-import os
-import warnings
+import operator as _operator
+import os as _os
+import warnings as _warnings
 
-from . import _range_nlm
+import numpy as _np
+
+from . import _interop, _range_nlm
 from ._range_nlm import (
     InputError,
     Intrinsics,
@@ -28,7 +30,7 @@ from ._range_nlm import (
     write_depth_png,
     write_pcd,
 )
-from .interop import (
+from ._interop import (
     denoise_rgbd,
     from_open3d,
     from_open3d_depth,
@@ -44,11 +46,11 @@ def _package_version():
     try:
         import importlib.metadata as metadata
         dist = metadata.distribution("range_nlm")
-        installed = os.path.realpath(str(dist.locate_file("range_nlm")))
+        installed = _os.path.realpath(str(dist.locate_file("range_nlm")))
     except Exception:  # not installed (e.g. imported from a build tree), or no importlib.metadata
         return _range_nlm.__version__
     # Another range_nlm installed elsewhere says nothing about this one (a build tree on PYTHONPATH).
-    if installed != os.path.realpath(os.path.dirname(__file__)):
+    if installed != _os.path.realpath(_os.path.dirname(__file__)):
         return _range_nlm.__version__
     return dist.version
 
@@ -115,6 +117,11 @@ def _default_intrinsics(caller, depth, depth_scale):
     global _default_intrinsics_warned
     intrinsics = Intrinsics()
     dtype = getattr(depth, "dtype", None)
+    if dtype is None:  # an array-like, such as a list: as the call will read it
+        try:
+            dtype = _np.asarray(depth).dtype
+        except Exception:  # refused by the call, with its own error
+            dtype = None
     # Only for a depth image the call takes (uint16 or float); any other is refused with its own error.
     is_depth = dtype is not None and ((dtype.kind == "u" and dtype.itemsize == 2) or dtype.kind == "f")
     if is_depth and not _default_intrinsics_warned:
@@ -122,9 +129,9 @@ def _default_intrinsics(caller, depth, depth_scale):
         defaults = "fx %g, fy %g, cx %g, cy %g" % (intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy)
         if depth_scale is None and dtype.kind == "u":
             defaults += ", depth-scale %g" % intrinsics.depth_scale
-        warnings.warn("range_nlm: %s: this and any other depth image without intrinsics are read with default "
-                      "intrinsics (%s: a 640 x 480 Kinect v1 / TUM RGB-D camera); give intrinsics= for your camera, "
-                      "or the depths and positions are wrong" % (caller, defaults), UserWarning, stacklevel=3)
+        _warnings.warn("range_nlm: %s: this and any other depth image without intrinsics are read with default "
+                       "intrinsics (%s: a 640 x 480 Kinect v1 / TUM RGB-D camera); give intrinsics= for your camera, "
+                       "or the depths and positions are wrong" % (caller, defaults), UserWarning, stacklevel=3)
     return intrinsics
 
 
@@ -145,11 +152,18 @@ def depth_to_points(depth, intrinsics=None, depth_scale=None):
     return _range_nlm._depth_to_points(depth, intrinsics, depth_scale)
 
 
-def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **params):
+def denoise(points, parameters=None, *, return_info=False, viewpoint=None, width=None, height=None, **params):
     """Filters an organized frame of points.
 
-    points: H x W x 3 float32 or float64 array, C-contiguous; NaN (in any coordinate) marks an
-        invalid point, which stays NaN in x, y and z. An infinite coordinate is refused.
+    points: H x W x 3 float32 or float64 array; NaN (in any coordinate) marks an invalid point,
+        which stays NaN in x, y and z. An infinite coordinate is refused. A C-contiguous array is
+        read in place; a strided view or an array-like (nested lists) is copied first. Or an
+        open3d.geometry.PointCloud (or open3d.t.geometry.PointCloud) whose points are an
+        organized frame in row-major order: the result is a new cloud of that kind, the points
+        filtered in the same order, colours and normals kept.
+    width, height: for an Open3D cloud, its organized size (one is enough; not needed for a
+        cloud from to_open3d or from denoise). A size that does not match the point count raises
+        ValueError.
     parameters: a Parameters object, a preset name ('default', 'live' for a live camera's frame
         rate, or 'paper'), or None (the recommended setting, 'default');
         the keyword arguments override it (see Parameters.registry() for every one).
@@ -163,6 +177,12 @@ def denoise(points, parameters=None, *, return_info=False, viewpoint=None, **par
     released while the frame is filtered; Ctrl-C stops the call (KeyboardInterrupt) at the
     filter's next stage.
     """
+    if _interop._is_open3d(points):
+        return _interop.denoise_open3d_cloud(denoise, points, width, height, parameters=parameters,
+                                             return_info=return_info, viewpoint=viewpoint, **params)
+    if width is not None or height is not None:
+        raise TypeError("range_nlm: width and height are the organized size of an Open3D PointCloud; an array's "
+                        "size is its shape (got %s)" % type(points).__name__)
     result, info = _range_nlm._denoise(points, _parameters(parameters, params), viewpoint)
     return (result, info) if return_info else result
 
@@ -172,7 +192,10 @@ def denoise_depth(depth, intrinsics=None, parameters=None, *, depth_scale=None, 
     """Filters a depth image.
 
     depth: H x W uint16 image (value / depth_scale = metres, 0 = no measurement), or float32 /
-        float64 (value / depth_scale metres; 0, negative or NaN = no measurement).
+        float64 (value / depth_scale metres; 0, negative or NaN = no measurement). A strided view
+        or an array-like (nested lists of floats) is copied first. Or an open3d.geometry.Image (or
+        open3d.t.geometry.Image) of one channel: with output='depth' the result is an Image of
+        that kind.
     intrinsics: Intrinsics, dict or object with fx, fy, cx, cy (pixels); None: the defaults of
         range_nlm_denoise (525, 525, 319.5, 239.5, depth scale 5000), with a UserWarning (once per
         process) that they are a Kinect v1's, not necessarily the camera's.
@@ -183,6 +206,10 @@ def denoise_depth(depth, intrinsics=None, parameters=None, *, depth_scale=None, 
         NaN); 'points' gives the filtered H x W x 3 float32 points.
     Other arguments as denoise().
     """
+    if _interop._is_open3d(depth):
+        return _interop.denoise_open3d_image(denoise_depth, depth, intrinsics=intrinsics, parameters=parameters,
+                                             depth_scale=depth_scale, output=output, return_info=return_info,
+                                             **params)
     if intrinsics is None:
         intrinsics = _default_intrinsics("denoise_depth", depth, depth_scale)
     else:
@@ -213,7 +240,7 @@ class Stream:
                  output="depth", **params):
         if isinstance(radius, bool) or not hasattr(radius, "__index__"):
             raise TypeError("range_nlm: radius must be an integer, got %r" % (radius,))
-        radius = operator.index(radius)
+        radius = _operator.index(radius)
         if radius < 0:
             raise ValueError("range_nlm: radius must be >= 0, got %d" % radius)
         if mode is None:

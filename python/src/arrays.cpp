@@ -31,27 +31,53 @@ shapeText(const py::array& a)
   return text + (a.ndim() == 1 ? ",)" : ")");
 }
 
-/// The array `value`, checked: a numpy array of `ndim` dimensions (the last of size `last` if
-/// `last` > 0), not empty, C-contiguous, of one of `types` (numpy type characters).
+/// The array `value`, checked: a numpy array, or anything numpy.asarray takes (a list, a tuple,
+/// an object with __array__), of `ndim` dimensions (the last of size `last` if `last` > 0), not
+/// empty, of one of `types` (numpy type characters). An array-like of integers becomes
+/// `integers_as` (0: refused by its type). A C-contiguous, aligned array of native byte order is
+/// returned as it is (read in place); any other (a strided view, a transposed or byte-swapped
+/// array) is copied into one.
 py::array
 checkedArray(const py::handle& value, const char* what, int ndim, py::ssize_t last, const char* layout,
-             const std::string& types, const char* type_names)
+             const std::string& types, const char* type_names, char integers_as = 0)
 {
-  if (!py::isinstance<py::array>(value))
-    throw py::type_error("range_nlm: " + std::string(what) + " must be a numpy array (" + layout + "), got " +
-                         typeName(value));
-  py::array a = py::reinterpret_borrow<py::array>(value);
+  const py::module_ numpy = py::module_::import("numpy");
+  py::array a;
+  if (py::isinstance<py::array>(value)) {
+    a = py::reinterpret_borrow<py::array>(value);
+  } else {
+    try {
+      a = numpy.attr("asarray")(value);
+    } catch (const py::error_already_set& e) {
+      throw py::type_error("range_nlm: " + std::string(what) + " must be a numpy array or an array-like (" + layout +
+                           "), got " + typeName(value) + " (numpy.asarray: " + e.what() + ")");
+    }
+    const char kind = a.dtype().kind();
+    if (kind == 'O' || kind == 'U' || kind == 'S' || kind == 'V')
+      throw py::type_error("range_nlm: " + std::string(what) + " must be a numpy array or an array-like of numbers (" +
+                           layout + "), got " + typeName(value) + " that numpy reads as " +
+                           py::str(a.dtype()).cast<std::string>() + " of shape " + shapeText(a));
+    if (integers_as != 0 && (kind == 'i' || kind == 'u' || kind == 'b'))
+      a = a.attr("astype")(std::string(1, integers_as));
+  }
   if (a.ndim() != ndim || (last > 0 && a.shape(ndim - 1) != last) || a.size() == 0)
     throw py::value_error("range_nlm: " + std::string(what) + " must be " + layout + ", got shape " + shapeText(a));
   const char type = a.dtype().char_();
   const bool native = a.dtype().attr("isnative").cast<bool>();
-  if (types.find(type) == std::string::npos || !native)
+  if (types.find(type) == std::string::npos) {
+    const char kind = a.dtype().kind();
+    // Integers other than uint16 for a depth image: raw sensor units or metres cannot be told.
+    const bool depth_integers = types.find('H') != std::string::npos && (kind == 'i' || kind == 'u' || kind == 'b');
     throw py::type_error("range_nlm: " + std::string(what) + " must be " + type_names + ", got " +
-                         py::str(a.dtype()).cast<std::string>() + (native ? "" : " (non-native byte order)"));
-  if (!(a.flags() & py::array::c_style) || !(a.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_))
-    throw py::value_error("range_nlm: " + std::string(what) +
-                          " must be a C-contiguous array (got a strided or unaligned view); pass "
-                          "numpy.ascontiguousarray(...)");
+                         py::str(a.dtype()).cast<std::string>() +
+                         (py::isinstance<py::array>(value) ? "" : " (the array numpy makes of the " + typeName(value) +
+                                                                      ")") +
+                         (depth_integers ? "; give numpy.asarray(depth, dtype=numpy.uint16) for raw sensor values, "
+                                           "floats for metres"
+                                         : ""));
+  }
+  if (!native || !(a.flags() & py::array::c_style) || !(a.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_))
+    a = numpy.attr("ascontiguousarray")(a, a.dtype().attr("newbyteorder")("="));
   return a;
 }
 
@@ -96,10 +122,12 @@ warnClamping(const DepthClamping& clamping, double depth_scale)
 } // namespace
 
 Cloud::Ptr
-cloudFromPoints(const py::handle& points, const char* what, const Eigen::Vector4f& viewpoint)
+cloudFromPoints(const py::handle& points, const char* what, const Eigen::Vector4f& viewpoint, char* type)
 {
   const py::array a = checkedArray(points, what, 3, 3, "an organized H x W x 3 array of points (NaN = invalid)",
-                                   "fd", "float32 or float64");
+                                   "fd", "float32 or float64", 'd');
+  if (type)
+    *type = a.dtype().char_();
   Cloud::Ptr cloud(new Cloud(static_cast<std::uint32_t>(a.shape(1)), static_cast<std::uint32_t>(a.shape(0))));
   if (a.dtype().char_() == 'f')
     copyPoints(static_cast<const float*>(a.data()), *cloud);

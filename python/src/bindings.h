@@ -43,16 +43,19 @@ struct FrameFormat
   Cloud::ConstPtr input;
 };
 
-/// The organized cloud of an H x W x 3 float32 / float64 array (read in place, no copy on the
-/// Python side) with the sensor at `viewpoint`. Throws TypeError / ValueError naming `what` for
-/// any other type, shape or layout.
+/// The organized cloud of an H x W x 3 float32 / float64 array with the sensor at `viewpoint`: a
+/// C-contiguous array is read in place; a strided view, another byte order or an array-like (a
+/// nested list of numbers; integers become float64) is copied first. `type`, if given, is set to
+/// the numpy type character of the points read ('f' or 'd'). Throws TypeError / ValueError naming
+/// `what` for any other type or shape.
 Cloud::Ptr
-cloudFromPoints(const py::handle& points, const char* what, const Eigen::Vector4f& viewpoint);
+cloudFromPoints(const py::handle& points, const char* what, const Eigen::Vector4f& viewpoint, char* type = nullptr);
 /// A new H x W x 3 array of `type` ('f' or 'd') holding the cloud's points.
 py::array
 pointsFromCloud(const Cloud& cloud, char type);
 
-/// The cloud of an H x W uint16 or float depth image back-projected with `intrinsics` and
+/// The cloud of an H x W uint16 or float depth image (any layout, or an array-like of floats)
+/// back-projected with `intrinsics` and
 /// `depth_scale` (library code: depthImageToCloud / depthMapToCloud); `format` is set to match.
 Cloud::Ptr
 cloudFromDepth(const py::handle& depth, const DepthIntrinsics& intrinsics, double depth_scale, bool depth_output,

@@ -18,8 +18,35 @@ namespace python
 namespace
 {
 
+/// The colours of a cloud with an `rgb` or `rgba` field (PCL's packing: 0x00RRGGBB in 4 bytes,
+/// blue first in memory) as H x W x 3 uint8 (red, green, blue); None without such a field.
 py::object
-readPcd(const py::handle& path_argument, bool return_viewpoint)
+colorsOf(const pcl::PCLPointCloud2& blob)
+{
+  const pcl::PCLPointField* rgb = nullptr;
+  for (const pcl::PCLPointField& f : blob.fields)
+    if ((f.name == "rgb" || f.name == "rgba") && f.count == 1 &&
+        (f.datatype == pcl::PCLPointField::FLOAT32 || f.datatype == pcl::PCLPointField::UINT32))
+      rgb = &f;
+  if (!rgb)
+    return py::none();
+  py::array_t<std::uint8_t> out({py::ssize_t(blob.height), py::ssize_t(blob.width), py::ssize_t(3)});
+  std::uint8_t* data = out.mutable_data();
+  for (std::uint32_t v = 0; v < blob.height; ++v)
+    for (std::uint32_t u = 0; u < blob.width; ++u) {
+      std::uint32_t packed;
+      std::memcpy(&packed, &blob.data[std::size_t(v) * blob.row_step + std::size_t(u) * blob.point_step + rgb->offset],
+                  sizeof packed);
+      std::uint8_t* pixel = data + 3 * (std::size_t(v) * blob.width + u);
+      pixel[0] = static_cast<std::uint8_t>(packed >> 16);
+      pixel[1] = static_cast<std::uint8_t>(packed >> 8);
+      pixel[2] = static_cast<std::uint8_t>(packed);
+    }
+  return std::move(out);
+}
+
+py::object
+readPcd(const py::handle& path_argument, bool return_viewpoint, bool return_colors)
 {
   const std::string path = pathArgument(path_argument, "path");
   io::LoadedCloud loaded;
@@ -30,9 +57,15 @@ readPcd(const py::handle& path_argument, bool return_viewpoint)
     cloud = io::xyzFromBlob(loaded, path);
   }
   py::array points = pointsFromCloud(cloud, 'f');
-  if (!return_viewpoint)
+  if (!return_viewpoint && !return_colors)
     return std::move(points);
-  return py::make_tuple(points, py::make_tuple(loaded.origin[0], loaded.origin[1], loaded.origin[2]));
+  py::list result;
+  result.append(points);
+  if (return_viewpoint)
+    result.append(py::make_tuple(loaded.origin[0], loaded.origin[1], loaded.origin[2]));
+  if (return_colors)
+    result.append(colorsOf(loaded.blob));
+  return py::tuple(result);
 }
 
 void
@@ -217,9 +250,11 @@ bindFiles(py::module_& m)
     }
   });
   bindIntrinsics(m);
-  m.def("read_pcd", &readPcd, py::arg("path"), py::arg("return_viewpoint") = false,
+  m.def("read_pcd", &readPcd, py::arg("path"), py::arg("return_viewpoint") = false, py::arg("return_colors") = false,
         "Reads an organized PCD file (checked as range_nlm_denoise reads it) as an H x W x 3 float32 array, "
-        "NaN where invalid; with return_viewpoint=True also the sensor origin of its VIEWPOINT line.");
+        "NaN where invalid; with return_viewpoint=True also the sensor origin of its VIEWPOINT line, with "
+        "return_colors=True also its colours (an rgb or rgba field) as H x W x 3 uint8 red, green, blue, or None "
+        "without colours; the extras follow the points in that order.");
   m.def("write_pcd", &writePcd, py::arg("path"), py::arg("points"),
         py::arg("viewpoint") = std::vector<float>{0.0f, 0.0f, 0.0f},
         "Writes an H x W x 3 array as an organized binary PCD file (x, y, z), atomically.");

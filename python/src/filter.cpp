@@ -139,10 +139,9 @@ py::tuple
 denoise(const py::handle& points, const py::handle& parameters, const py::handle& viewpoint)
 {
   const FilterParameters p = parametersOf(parameters);
-  const Cloud::Ptr frame = cloudFromPoints(points, "points", viewpointOf(viewpoint));
-  const auto [result, info] = filterFrame(frame, p);
   FrameFormat format;
-  format.type = py::reinterpret_borrow<py::array>(points).dtype().char_();
+  const Cloud::Ptr frame = cloudFromPoints(points, "points", viewpointOf(viewpoint), &format.type);
+  const auto [result, info] = filterFrame(frame, p);
   return py::make_tuple(resultOf(*result, format), infoDict(info));
 }
 

@@ -49,11 +49,15 @@ public:
     FrameFormat format;
     Cloud::Ptr cloud;
     const std::string what = "frame " + std::to_string(pushed_);
-    if (intrinsics_ && py::isinstance<py::array>(frame) && py::reinterpret_borrow<py::array>(frame).ndim() == 2)
-      cloud = cloudFromDepth(frame, *intrinsics_, depthScaleOf(frame, *intrinsics_, depth_scale_), depth_output_,
+    // An array-like is taken as numpy.asarray reads it, so that its dimensions tell a depth image.
+    const py::object array = !intrinsics_ || py::isinstance<py::array>(frame)
+                                 ? py::reinterpret_borrow<py::object>(frame)
+                                 : py::module_::import("numpy").attr("asarray")(frame);
+    if (intrinsics_ && py::isinstance<py::array>(array) && py::reinterpret_borrow<py::array>(array).ndim() == 2)
+      cloud = cloudFromDepth(array, *intrinsics_, depthScaleOf(array, *intrinsics_, depth_scale_), depth_output_,
                              format, what.c_str());
     else
-      cloud = cloudFromPoints(frame, what.c_str(), Eigen::Vector4f::Zero());
+      cloud = cloudFromPoints(frame, what.c_str(), Eigen::Vector4f::Zero(), &format.type);
     return run([&] { return stream_.push(cloud); }, &format);
   }
 

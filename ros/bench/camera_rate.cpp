@@ -1,15 +1,11 @@
-// range_nlm_ros_camera_rate: the camera-rate benchmark's two halves (ros/bench/camera_rate.sh
-// runs them around a nodelet manager).
+// range_nlm_ros_camera_rate: the camera-rate benchmark's player (ros/bench/camera_rate.sh runs
+// it around a nodelet manager, on a bag made by range_nlm_make_bag).
 //
-//   range_nlm_ros_camera_rate make-bag OUT.bag TOPIC FRAME.pcd...
-//       a bag of the frames as sensor_msgs/PointCloud2 (every field of the PCD kept), 1/30 s apart
 //   range_nlm_ros_camera_rate play BAG INPUT OUTPUT SECONDS [RATE_HZ]
 //       publishes the bag's clouds on INPUT at RATE_HZ (30), looping, each stamped with the time
 //       it is sent, as a camera driver does; receives OUTPUT and prints one line of figures:
 //       output rate, latency from stamp to receipt (median, 95th percentile), frames dropped and
 //       the median age of the previous output's frame.
-#include <range_nlm/io/pcd_file.h>
-
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -18,51 +14,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 #include <mutex>
 #include <string>
 #include <vector>
 
 namespace
 {
-
-sensor_msgs::PointCloud2
-toMessage(const pcl::PCLPointCloud2& blob)
-{
-  sensor_msgs::PointCloud2 m;
-  m.header.frame_id = "camera_depth_optical_frame";
-  m.width = blob.width;
-  m.height = blob.height;
-  for (const pcl::PCLPointField& f : blob.fields) {
-    sensor_msgs::PointField field;
-    field.name = f.name;
-    field.offset = f.offset;
-    field.datatype = f.datatype;
-    field.count = f.count;
-    m.fields.push_back(field);
-  }
-  m.is_bigendian = blob.is_bigendian;
-  m.point_step = blob.point_step;
-  m.row_step = blob.row_step;
-  m.data = blob.data;
-  m.is_dense = blob.is_dense;
-  return m;
-}
-
-int
-makeBag(const std::string& path, const std::string& topic, const std::vector<std::string>& frames)
-{
-  rosbag::Bag bag(path, rosbag::bagmode::Write);
-  ros::Time time(1.0);
-  for (const std::string& frame : frames) {
-    sensor_msgs::PointCloud2 m = toMessage(range_nlm::io::loadCloud(frame).blob);
-    m.header.stamp = time;
-    bag.write(topic, time, m);
-    time += ros::Duration(1.0 / 30.0);
-  }
-  bag.close();
-  std::printf("wrote %zu frames to %s on %s\n", frames.size(), path.c_str(), topic.c_str());
-  return 0;
-}
 
 /// What came back: per output, the stamp it carries and when it arrived.
 struct Receipts
@@ -171,15 +129,12 @@ main(int argc, char** argv)
   ros::init(argc, argv, "range_nlm_camera_rate", ros::init_options::AnonymousName);
   const std::vector<std::string> args(argv + 1, argv + argc);
   try {
-    if (args.size() >= 4 && args[0] == "make-bag")
-      return makeBag(args[1], args[2], std::vector<std::string>(args.begin() + 3, args.end()));
     if ((args.size() == 5 || args.size() == 6) && args[0] == "play")
       return play(args[1], args[2], args[3], std::stod(args[4]), args.size() == 6 ? std::stod(args[5]) : 30.0);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "range_nlm_ros_camera_rate: %s\n", e.what());
     return 1;
   }
-  std::fprintf(stderr, "usage: range_nlm_ros_camera_rate make-bag OUT.bag TOPIC FRAME.pcd...\n"
-                       "       range_nlm_ros_camera_rate play BAG INPUT OUTPUT SECONDS [RATE_HZ]\n");
+  std::fprintf(stderr, "usage: range_nlm_ros_camera_rate play BAG INPUT OUTPUT SECONDS [RATE_HZ]\n");
   return 2;
 }

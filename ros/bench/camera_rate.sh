@@ -16,8 +16,10 @@ seconds=${2:-10}
 rate=${3:-30}
 devel=$build/ros/devel
 player=$devel/lib/range_nlm/range_nlm_ros_camera_rate
+make_bag=$devel/bin/range_nlm_make_bag
 nodelet=/usr/lib/nodelet/nodelet
 [[ -x $player ]] || { echo "camera_rate.sh: $player is missing (build the target range_nlm_ros_camera_rate)" >&2; exit 2; }
+[[ -x $make_bag ]] || { echo "camera_rate.sh: $make_bag is missing (build the target range_nlm_make_bag)" >&2; exit 2; }
 [[ -x $nodelet ]] || nodelet=$(command -v nodelet) || { echo "camera_rate.sh: no nodelet executable (libnodeletlib-tools)" >&2; exit 2; }
 
 work=$(mktemp -d /tmp/range_nlm_camera_rate.XXXXXX)
@@ -54,7 +56,7 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 
-"$player" make-bag "$work/vga.bag" /camera/depth/points "$root"/data/kinect-sequence/*.pcd >/dev/null
+"$make_bag" "$work/vga.bag" "$root"/data/kinect-sequence/*.pcd --topic /camera/depth/points --rate 30 >/dev/null
 "$nodelet" manager __name:=camera_rate_manager >"$work/manager.log" 2>&1 &
 pids+=($!)
 

@@ -21,7 +21,11 @@ void
 FrameStatistics::published(double latency_s, double filter_ms)
 {
   ++published_total_;
-  latencies_ms_.push_back(latency_s * 1000.0);
+  ++published_;
+  if (std::isfinite(latency_s) && latency_s >= earliest_latency_s && latency_s <= latest_latency_s)
+    latencies_ms_.push_back(latency_s * 1000.0);
+  else
+    ++off_clock_;
   filter_ms_.push_back(filter_ms);
 }
 
@@ -32,16 +36,18 @@ FrameStatistics::summarize(double now)
   s.seconds = now - period_start_;
   if (s.seconds > 0.0) {
     s.input_hz = static_cast<double>(received_) / s.seconds;
-    s.output_hz = static_cast<double>(latencies_ms_.size()) / s.seconds;
+    s.output_hz = static_cast<double>(published_) / s.seconds;
   }
   s.latency_median_ms = quantile(latencies_ms_, 0.5);
   s.latency_p95_ms = quantile(latencies_ms_, 0.95);
+  s.latency_frames = latencies_ms_.size();
+  s.stamps_off_clock = off_clock_;
   s.filter_median_ms = quantile(filter_ms_, 0.5);
   s.dropped = dropped_;
   s.dropped_total = dropped_total_;
   s.published_total = published_total_;
   period_start_ = now;
-  received_ = dropped_ = 0;
+  received_ = dropped_ = published_ = off_clock_ = 0;
   latencies_ms_.clear();
   filter_ms_.clear();
   return s;

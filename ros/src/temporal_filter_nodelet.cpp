@@ -32,8 +32,11 @@ TemporalFilterNodelet::onInit()
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(), private_node, getName());
   diagnostics_->setHardwareID("none");
   diagnostics_->add("filter", this, &TemporalFilterNodelet::reportDiagnostics);
-  diagnostics_timer_ = private_node.createWallTimer(ros::WallDuration(0.25),
-                                                    [this](const ros::WallTimerEvent&) { diagnostics_->update(); });
+  // Published by the wall clock: under use_sim_time the Updater's own pacing (by ros::Time)
+  // stops while a bag's clock is paused or at its end, and for good when a looped bag's clock
+  // goes back.
+  diagnostics_timer_ = private_node.createWallTimer(ros::WallDuration(diagnostics_->getPeriod()),
+                                                    [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
   reconfigure_ = std::make_unique<ParameterReconfigure>(private_node, settings_.stream,
                                                         [this](const StreamSettings& s) { reconfigure(s); });
   advertise();
@@ -313,6 +316,11 @@ TemporalFilterNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWra
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "idle: no subscriber to the output");
   else if (s.dropped > 0)
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%zu frames dropped", s.dropped);
+  else if (s.stamps_off_clock > 0)
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "%zu frames stamped on another clock than the node's: no latency (a bag played without "
+                    "--clock and use_sim_time?)",
+                    s.stamps_off_clock);
   else if (s.input_hz > 0.0 && s.output_hz < 0.9 * s.input_hz)
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "the filter is slower than the input");
   else
@@ -321,8 +329,14 @@ TemporalFilterNodelet::reportDiagnostics(diagnostic_updater::DiagnosticStatusWra
   status.add("subscribed", subscribed);
   status.addf("input rate (Hz)", "%.2f", s.input_hz);
   status.addf("output rate (Hz)", "%.2f", s.output_hz);
-  status.addf("latency median (ms)", "%.1f", s.latency_median_ms);
-  status.addf("latency p95 (ms)", "%.1f", s.latency_p95_ms);
+  if (s.latency_frames > 0) {
+    status.addf("latency median (ms)", "%.1f", s.latency_median_ms);
+    status.addf("latency p95 (ms)", "%.1f", s.latency_p95_ms);
+  } else {
+    status.add("latency median (ms)", "n/a");
+    status.add("latency p95 (ms)", "n/a");
+  }
+  status.add("frames stamped off the node's clock", s.stamps_off_clock);
   status.addf("filter time median (ms)", "%.1f", s.filter_median_ms);
   status.add("frames dropped", s.dropped);
   status.add("frames dropped in all", s.dropped_total);

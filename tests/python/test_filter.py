@@ -114,9 +114,10 @@ def test_return_info_gives_the_bandwidths_the_filter_chose():
     "make, error, words",
     [
         (lambda p: p[:, :, 2], ValueError, "H x W x 3"),
-        (lambda p: p[:, ::2], ValueError, "C-contiguous"),
         (lambda p: p.astype(np.int32), TypeError, "float32 or float64"),
-        (lambda p: p.tolist(), TypeError, "numpy array"),
+        (lambda p: [["a", "b", "c"]], TypeError, "array-like of numbers"),
+        (lambda p: object(), TypeError, "array-like of numbers"),
+        (lambda p: p.tolist()[:2] + [[[1.0]]], TypeError, "array-like"),
         (lambda p: p[:0], ValueError, "shape (0, 64, 3)"),
     ],
 )
@@ -226,3 +227,58 @@ def test_depth_to_points_back_projects_as_the_library_reads_a_png(tmp_path):
     assert points[0, 0].tolist() == pytest.approx([-0.035, -0.025, 1.0])
     metres = range_nlm.depth_to_points(depth.astype(np.float32) / 5000, intrinsics)
     assert np.array_equal(bits(metres), bits(points))
+
+
+@pytest.mark.parametrize(
+    "view",
+    [
+        lambda p: p[::2, ::3],                                   # a strided view
+        lambda p: np.asfortranarray(p),                          # another order
+        lambda p: p.astype(p.dtype.newbyteorder(">")),           # another byte order
+        lambda p: np.lib.stride_tricks.as_strided(p, p.shape, p.strides),  # writeable=False view
+    ],
+)
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_a_view_that_is_not_contiguous_gives_the_bytes_of_its_contiguous_copy(view, dtype):
+    points = plane(dtype=dtype)
+    points[5, 9] = np.nan
+    strided = view(points)
+    copy = np.ascontiguousarray(strided, dtype=dtype)
+    result = range_nlm.denoise(strided, **SMALL)
+    assert result.dtype == dtype and result.shape == copy.shape
+    assert np.array_equal(bits(result), bits(range_nlm.denoise(copy, **SMALL)))
+    assert np.array_equal(bits(strided), bits(view(points)))  # the input is left as it was
+
+
+def test_a_strided_depth_view_gives_the_bytes_of_its_contiguous_copy():
+    depth = np.nan_to_num(np.round(plane(128, 48)[:, :, 2] * 5000.0), nan=0.0).astype(np.uint16)
+    strided = depth[:, ::2]
+    assert not strided.flags.c_contiguous
+    intrinsics = range_nlm.Intrinsics(fx=30, fy=60, cx=31.5, cy=23.5)
+    copy = np.ascontiguousarray(strided)
+    assert np.array_equal(range_nlm.denoise_depth(strided, intrinsics, **SMALL),
+                          range_nlm.denoise_depth(copy, intrinsics, **SMALL))
+    metres = (strided / 5000.0).T  # float64, transposed
+    assert np.array_equal(bits(range_nlm.denoise_depth(metres, intrinsics, **SMALL)),
+                          bits(range_nlm.denoise_depth(np.ascontiguousarray(metres), intrinsics, **SMALL)))
+
+
+def test_lists_are_read_as_numpy_reads_them():
+    points = plane(width=24, height=16, dtype=np.float64)
+    result = range_nlm.denoise(points.tolist(), **SMALL)
+    assert result.dtype == np.float64  # numpy.asarray of floats
+    assert np.array_equal(bits(result), bits(range_nlm.denoise(points, **SMALL)))
+    # Integers (millimetres, say) become float64.
+    integers = np.round(points * 1000).astype(np.int64)
+    assert np.array_equal(bits(range_nlm.denoise(integers.tolist(), **SMALL)),
+                          bits(range_nlm.denoise(integers.astype(np.float64), **SMALL)))
+    # A depth image as a list of floats (metres), also through a stream.
+    depth = points[:, :, 2]
+    intrinsics = range_nlm.Intrinsics(fx=60, fy=60, cx=12, cy=8)
+    assert np.array_equal(bits(range_nlm.denoise_depth(depth.tolist(), intrinsics, **SMALL)),
+                          bits(range_nlm.denoise_depth(depth, intrinsics, **SMALL)))
+    stream = range_nlm.Stream(0, intrinsics=intrinsics, **SMALL)
+    assert np.array_equal(bits(stream.push(depth.tolist())[0]), bits(range_nlm.denoise_depth(depth, intrinsics, **SMALL)))
+    # A list of integers is no depth image: raw values need their dtype.
+    with pytest.raises(TypeError, match="dtype=numpy.uint16"):
+        range_nlm.denoise_depth(np.round(depth * 5000).astype(int).tolist(), intrinsics, **SMALL)

@@ -1,4 +1,4 @@
-"""The package itself: __version__, the warning about default intrinsics, Stream's repr."""
+"""The package itself: __version__, the warning about default intrinsics, reprs, a clean dir()."""
 
 import os
 import re
@@ -80,3 +80,30 @@ def test_stream_repr_shows_radius_mode_and_held_frames():
     assert repr(stream) == "range_nlm.Stream(radius=1, mode='causal', held_frames=%d)" % stream.held_frames
     assert stream.held_frames == 1
     assert repr(range_nlm.Stream(2, **SMALL)) == "range_nlm.Stream(radius=2, mode='centred', held_frames=0)"
+
+
+def test_dir_lists_the_api_and_nothing_else():
+    public = {name for name in dir(range_nlm) if not name.startswith("_")}
+    # No helper module or imported name leaks (operator, os, warnings, numpy, interop, ...).
+    assert public == set(range_nlm.__all__)
+    for name in range_nlm.__all__:
+        assert getattr(range_nlm, name).__module__.startswith("range_nlm"), name
+
+
+def test_reprs_say_what_the_objects_hold():
+    assert repr(range_nlm.Intrinsics(fx=500, fy=501, cx=320, cy=240, width=640, height=480)) == (
+        "range_nlm.Intrinsics(fx=500.0, fy=501.0, cx=320.0, cy=240.0, depth_scale=5000.0, width=640, height=480)")
+    p = range_nlm.Parameters(search_window=7)
+    assert repr(p).startswith("range_nlm.Parameters(") and "search_window=7" in repr(p)
+
+
+def test_a_depth_list_without_intrinsics_warns_too(fresh_warning):
+    depth = (_depth() / 5000.0).tolist()  # metres, as floats
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        range_nlm.denoise_depth(depth, **SMALL)
+        range_nlm.denoise_depth(depth, **SMALL)
+    warned = [w for w in caught if issubclass(w.category, UserWarning)]
+    assert len(warned) == 1 and "default intrinsics" in str(warned[0].message)
+    # Depth scale 1 for floats: the CLI's "depth-scale 5000" applies to 16-bit images only.
+    assert "depth-scale" not in str(warned[0].message)

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 using range_nlm_ros::FrameStatistics;
 
 TEST(FrameStatistics, RatesLatencyAndDropsOverOnePeriod)
@@ -53,4 +55,29 @@ TEST(FrameStatistics, QuantileByNearestRank)
   EXPECT_EQ(range_nlm_ros::quantile(values, 0.95), 5);
   std::vector<double> none;
   EXPECT_EQ(range_nlm_ros::quantile(none, 0.5), 0);
+}
+
+TEST(FrameStatistics, StampsOnAnotherClockGiveNoLatencyButCountAsPublished)
+{
+  FrameStatistics statistics(0.0);
+  // A bag's stamps near 0 against the wall clock (the node without use_sim_time), a stamp in the
+  // future, one not finite, and two measured ones.
+  statistics.published(1.8e9, 40.0);
+  statistics.published(-5.0, 40.0);
+  statistics.published(std::numeric_limits<double>::quiet_NaN(), 40.0);
+  statistics.published(0.030, 40.0);
+  statistics.published(0.050, 40.0);
+  const FrameStatistics::Summary s = statistics.summarize(1.0);
+  EXPECT_DOUBLE_EQ(s.output_hz, 5.0);
+  EXPECT_EQ(s.latency_frames, 2u);
+  EXPECT_EQ(s.stamps_off_clock, 3u);
+  EXPECT_NEAR(s.latency_median_ms, 30.0, 1e-9);
+  EXPECT_NEAR(s.latency_p95_ms, 50.0, 1e-9);
+  EXPECT_EQ(s.published_total, 5u);
+  // The next period starts with none off the clock.
+  statistics.published(0.020, 40.0);
+  const FrameStatistics::Summary next = statistics.summarize(2.0);
+  EXPECT_EQ(next.stamps_off_clock, 0u);
+  EXPECT_EQ(next.latency_frames, 1u);
+  EXPECT_NEAR(next.latency_median_ms, 20.0, 1e-9);
 }

@@ -2,6 +2,11 @@
 /// \brief What the nodelet's diagnostics report, counted as frames come and go: input and
 /// output rates, latency (header stamp to publication) and frames dropped, over the period
 /// since the last summary.
+///
+/// The latency is measured against the clock the node runs on (ros::Time::now(): /clock under
+/// use_sim_time). A stamp from another clock (a bag played without --clock, or under
+/// use_sim_time before the first /clock) gives no latency; such frames are counted apart, so
+/// that the quantiles hold real latencies only.
 #pragma once
 
 #include <cstddef>
@@ -13,8 +18,14 @@ namespace range_nlm_ros
 class FrameStatistics
 {
 public:
+  /// The latencies taken as measured: from a moment before the stamp (clocks of two machines
+  /// differ a little) to a minute after it. Anything else is a stamp on another clock.
+  static constexpr double earliest_latency_s = -1.0;
+  static constexpr double latest_latency_s = 60.0;
+
   /// One period's figures. Rates are 0 when the period is empty; the latency and filter
-  /// quantiles are 0 when nothing was published in it.
+  /// quantiles are 0 when nothing was published in it (latency: nothing with a stamp on the
+  /// node's clock, `latency_frames` 0).
   struct Summary
   {
     double seconds = 0.0;
@@ -22,6 +33,9 @@ public:
     double output_hz = 0.0;
     double latency_median_ms = 0.0;
     double latency_p95_ms = 0.0;
+    /// Frames whose latency was measured, and frames whose stamp is on another clock.
+    std::size_t latency_frames = 0;
+    std::size_t stamps_off_clock = 0;
     double filter_median_ms = 0.0;
     std::size_t dropped = 0;
     std::size_t dropped_total = 0;
@@ -33,7 +47,9 @@ public:
 
   /// A message arrived.
   void received() { ++received_; }
-  /// A frame was published `latency_s` after its stamp; the filter took `filter_ms` for it.
+  /// A frame was published `latency_s` after its stamp (now - stamp on the node's clock); the
+  /// filter took `filter_ms` for it. A latency outside [earliest_latency_s, latest_latency_s],
+  /// or not finite, counts as a stamp off the clock.
   void published(double latency_s, double filter_ms);
   /// A message was dropped (invalid, or not filtered).
   void dropped()
@@ -46,7 +62,8 @@ public:
 
 private:
   double period_start_;
-  std::size_t received_ = 0, dropped_ = 0, dropped_total_ = 0, published_total_ = 0;
+  std::size_t received_ = 0, dropped_ = 0, dropped_total_ = 0, published_total_ = 0, published_ = 0,
+              off_clock_ = 0;
   std::vector<double> latencies_ms_, filter_ms_;
 };
 
