@@ -58,6 +58,17 @@ timed(const Smoother& s, const Cloud& input, int runs, std::vector<double>& samp
   return result;
 }
 
+Row
+named(const std::string& frame, const std::string& metric, const std::string& family, const std::string& setting)
+{
+  Row r;
+  r.frame = frame;
+  r.metric = metric;
+  r.family = family;
+  r.setting = setting;
+  return r;
+}
+
 double
 median(std::vector<double> v)
 {
@@ -99,11 +110,11 @@ run(const Options& o, std::ostream& log)
   EvaluationOptions eval;
   eval.threads = o.threads;
   const std::string generated = "generated: boxes, " + o.model + " noise, seed " + std::to_string(o.seed);
-  Row noisy{generated, "flat RMSE against ground truth", "input", "raw"};
+  Row noisy = named(generated, "flat RMSE against ground truth", "input", "raw");
   noisy.accuracy_mm = 1e3 * evaluateFrame(frame.truth, frame.noisy, nullptr, eval).flat_rmse;
   rows.push_back(noisy);
   for (const Smoother& s : all) {
-    Row r{generated, "flat RMSE against ground truth", s.family, s.setting};
+    Row r = named(generated, "flat RMSE against ground truth", s.family, s.setting);
     const Cloud result = timed(s, frame.noisy, o.runs, r.samples_ms);
     const FrameMetrics m = evaluateFrame(frame.truth, result, &frame.noisy, eval);
     r.accuracy_mm = 1e3 * m.flat_rmse;
@@ -118,11 +129,11 @@ run(const Options& o, std::ostream& log)
     const Cloud raw = bench::loadXyzFrame(o.real_frame);
     const PlanarRegions regions = findPlanarRegions(raw);
     const std::string name = std::filesystem::path(o.real_frame).filename().string();
-    Row before{name, "residual to planes, interior", "input", "raw"};
+    Row before = named(name, "residual to planes, interior", "input", "raw");
     before.accuracy_mm = 1e3 * planarResidual(regions, raw).interior_rms;
     rows.push_back(before);
     for (const Smoother& s : all) {
-      Row r{name, "residual to planes, interior", s.family, s.setting};
+      Row r = named(name, "residual to planes, interior", s.family, s.setting);
       const Cloud result = timed(s, raw, o.runs, r.samples_ms);
       const PlanarResidual p = planarResidual(regions, result);
       r.accuracy_mm = 1e3 * p.interior_rms;
