@@ -48,7 +48,7 @@ def main():
     colour = {m: COLOURS[i % len(COLOURS)] for i, m in enumerate(models)}
     marker = {s: SCENE_MARKERS[i % len(SCENE_MARKERS)] for i, s in enumerate(scenes)}
 
-    fig, ax = plt.subplots(figsize=(7.5, 6.5))
+    fig, ax = plt.subplots(figsize=(9.5, 6.5))
     values = []
     for r in rows:
         bins = [b for b in r["all"] if b["points"] > 0 and b["predicted_mm"] > 0 and b["actual_mm"] > 0]
@@ -84,7 +84,7 @@ def main():
                        linewidth=0.8, label="temporal (middle of 3)"),
                 Line2D([], [], color="black", linewidth=1, label="calibrated (actual = predicted)"),
                 plt.Rectangle((0, 0), 1, 1, color="0.85", label="within 25 %")]
-    ax.legend(handles=handles, fontsize=8, loc="upper left", ncol=2)
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.03, 1.0), borderaxespad=0)
     fig.tight_layout()
     fig.savefig(args.png, dpi=110)
 
