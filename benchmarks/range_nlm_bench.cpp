@@ -66,7 +66,9 @@ const char* const kUsage =
     "child process; its peak memory is the child's ru_maxrss reported by wait4. The methods of a\n"
     "configuration take turns, --runs rounds of one turn each: an untimed warm-up run, then a\n"
     "timed one. A change of the machine's speed then reaches all of them alike. Each method's\n"
-    "figure is the median of its timed runs. Without options it uses the frames shipped in data/.";
+    "figure is the median of its timed runs. Without options it uses the frames shipped in data/.\n"
+    "With --accuracy-time, --quality, --real-noise, --generalisation, --temporal-comparison,\n"
+    "--uncertainty-calibration or --hole-filling it measures accuracy instead (see each option).";
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using CloudConstPtr = Cloud::ConstPtr;
