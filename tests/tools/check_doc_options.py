@@ -35,13 +35,19 @@ def help_options(tools_dir, tool):
 
 
 def logical_lines(text):
-    """(first line number, text) with backslash-continued lines joined."""
-    out, pending, start = [], "", 0
+    """(first line number, text) with backslash-continued lines joined, and in prose the lines an
+    inline code span runs across (an odd number of backticks so far)."""
+    out, pending, start, fenced = [], "", 0, False
     for number, line in enumerate(text.splitlines(), 1):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
         if not pending:
             start = number
         if line.rstrip().endswith("\\"):
             pending += line.rstrip()[:-1] + " "
+            continue
+        if not fenced and (pending + line).count("`") % 2 == 1:
+            pending += line + " "
             continue
         out.append((start, pending + line))
         pending = ""
