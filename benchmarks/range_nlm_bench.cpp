@@ -2,6 +2,7 @@
 // FastBilateralFilterOMP and MovingLeastSquares in one run, on the same frames, in the paper's
 // configurations, each method in a child process of its own (its own peak memory) and the
 // methods of a configuration taking turns (a warm-up call, then the timed one).
+#include "accuracy_time.h"
 #include "bench_support.h"
 #include "generalisation_comparison.h"
 #include "hole_filling_comparison.h"
@@ -66,7 +67,9 @@ const char* const kUsage =
     "child process; its peak memory is the child's ru_maxrss reported by wait4. The methods of a\n"
     "configuration take turns, --runs rounds of one turn each: an untimed warm-up run, then a\n"
     "timed one. A change of the machine's speed then reaches all of them alike. Each method's\n"
-    "figure is the median of its timed runs. Without options it uses the frames shipped in data/.";
+    "figure is the median of its timed runs. Without options it uses the frames shipped in data/.\n"
+    "With --accuracy-time, --quality, --real-noise, --generalisation, --temporal-comparison,\n"
+    "--uncertainty-calibration or --hole-filling it measures accuracy instead (see each option).";
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using CloudConstPtr = Cloud::ConstPtr;
@@ -1238,7 +1241,7 @@ checkJsonFile(const std::string& path)
   }
 }
 
-/// --quality or --temporal-comparison: accuracy instead of timing.
+/// --accuracy-time, --quality, --temporal-comparison, ...: accuracy instead of timing.
 void
 runComparison(const po::variables_map& vm)
 {
@@ -1248,7 +1251,27 @@ runComparison(const po::variables_map& vm)
   std::ostringstream report, json_text;
   if (vm.count("json-file"))
     checkJsonFile(vm["json-file"].as<std::string>()); // now rather than after a long run
-  if (vm.count("hole-filling")) {
+  if (vm.count("accuracy-time")) {
+    accuracy_time::Options a;
+    a.threads = vm["threads"].as<int>();
+    a.runs = vm["runs"].as<int>();
+    a.seed = vm["seed"].as<Unsigned64>().value;
+    const auto [w, h] = qualitySize(vm);
+    a.width = w, a.height = h;
+    a.model = vm["accuracy-time-noise"].as<std::string>();
+    a.real_frame = vm["accuracy-time-frame"].as<std::string>();
+    try {
+      accuracy_time::validate(a);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--accuracy-time: ") + e.what());
+    }
+    const auto rows = accuracy_time::run(a, log);
+    accuracy_time::printJson(rows, a, json_text);
+    if (json)
+      accuracy_time::printJson(rows, a, report);
+    else
+      accuracy_time::printTable(rows, a, report);
+  } else if (vm.count("hole-filling")) {
     holes::Options o;
     o.threads = vm["threads"].as<int>();
     o.fill_holes = vm["hole-filling-max"].as<int>();
@@ -1556,6 +1579,9 @@ run(int argc, char** argv)
     ("temporal-frames", po::value<int>()->default_value(12), "frames of the --temporal-comparison sequence")
     ("uncertainty-calibration", "instead of timing: whether the per-point uncertainty is calibrated: generated scenes of every sensor noise model (seed --seed, size --quality-size) filtered by the default with the uncertainty on, alone and as the middle frame of three; per decile of the predicted standard deviation the actual RMS error over the predicted RMS, all, flat and feature points")
     ("uncertainty-plot", po::value<std::string>()->default_value(""), "--uncertainty-calibration: also write the reliability diagram (predicted against actual RMS per decile, log-log, one colour per model) to this PNG")
+    ("accuracy-time", "instead of timing: accuracy against time per frame of range_nlm's presets (default, live, paper), pcl::FastBilateralFilter (sigma_s 5, 10, 15 px) and pcl::MovingLeastSquares (radius 0.02, 0.03, 0.05 m) on one generated frame (boxes scene, --accuracy-time-noise, --seed, --quality-size; flat RMSE against ground truth) and one real frame (--accuracy-time-frame; residual to its planes); each method --runs timed runs after a warm-up, on --threads threads (scripts/plot_accuracy_time.py draws the --json-file)")
+    ("accuracy-time-noise", po::value<std::string>()->default_value("stereo"), "--accuracy-time: noise model of the generated frame (range_nlm_synth --noise)")
+    ("accuracy-time-frame", po::value<std::string>()->default_value(default_input), "--accuracy-time: the real frame (organized PCD, or depth PNG with an intrinsics.txt beside it); empty: none")
     ("hole-filling", "instead of timing: range_nlm's hole filling against librealsense's hole-filling filter (its three modes, reimplemented) and OpenCV's inpainting (Telea, Navier-Stokes), on the raw frame and after range_nlm, on generated scenes with shadows beside depth edges and blobs punched out, against ground truth (frame size: --quality-size)")
     ("hole-filling-max", po::value<int>()->default_value(24), "--hole-filling: range_nlm's --fill-holes")
     ("quiet,q", "no progress lines on stderr");
@@ -1565,8 +1591,8 @@ run(int argc, char** argv)
   if (!parseCommandLine(argc, argv, options, positional, vm, kUsage))
     return 0;
 
-  if (vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") || vm.count("generalisation") ||
-      vm.count("uncertainty-calibration") || vm.count("hole-filling"))
+  if (vm.count("accuracy-time") || vm.count("quality") || vm.count("temporal-comparison") || vm.count("real-noise") ||
+      vm.count("generalisation") || vm.count("uncertainty-calibration") || vm.count("hole-filling"))
     runComparison(vm);
   else
     runTiming(settingsFrom(vm));

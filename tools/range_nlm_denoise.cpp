@@ -108,7 +108,8 @@ addOptions(po::options_description& options)
     ("curvature-limit", po::value<float>()->default_value(0.0f),
      "half-range of the --colorize colour scale, 1 / cloud unit (0 = 95th percentile of |H| of each frame)")
     ("output-format", po::value<std::string>()->default_value("auto"),
-     "pcd or png (16-bit depth = round(z * --depth-scale); x, y are not stored, so use --line-of-sight); "
+     "pcd or png (16-bit depth = round(z * --depth-scale) of each filtered point put back on its pixel's ray; "
+     "x, y are not stored, a reader recomputes them from the intrinsics); "
      "auto = png for an OUTPUT.png, else the format of the input")
     ("shard", po::value<std::string>(),
      "K/N: write only the K-th (from 0) of N contiguous parts of the frames, reading the frames around it that "
