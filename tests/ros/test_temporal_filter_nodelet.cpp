@@ -245,7 +245,7 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
                      "sight (automatic)"),
             std::string::npos)
       << log;
-  EXPECT_NE(log.find(" search_window=7 (set) patch=3 (set) dilation=0 "), std::string::npos) << log;
+  EXPECT_NE(log.find(" search_window=7 (set) patch=3 (set) temporal_search_window=3 dilation=0 "), std::string::npos) << log;
 }
 
 TEST(RosNode, TheUncertaintyImageIsPublishedWhenEnabledWithTheInputHeader)
