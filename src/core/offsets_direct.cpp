@@ -63,7 +63,11 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
         const bool inner_term = r < search_window / 2;
         const bool centre_term = !inner_term && term.grid == &center && inner_r < search_window / 2;
         centre_seen = centre_seen || centre_term;
-        double term_num = 0.0, term_den = 0.0, term_num2 = 0.0, term_den2 = 0.0, term_inner_den = 0.0;
+        // Into the sums of its window; the centre frame's weight also into its own two sums.
+        double& to_num = inner_term ? inner_num : num;
+        double& to_den = inner_term ? inner_den : den;
+        double& to_num2 = inner_term ? inner_num2 : num2;
+        double& to_den2 = inner_term ? inner_den2 : den2;
         const Grid& g = *term.grid;
         const Grid& c = term.patches ? *term.patches : center; // the centre patch's grid
         const float inv_d2 = term.inverse_distance2 ? (*term.inverse_distance2)[i]
@@ -104,25 +108,18 @@ computeOffsetsDirect(const Grid& center, const NormalField& normals,
             const double dist2 = dx * dx + dy * dy + dz * dz;
             const double h = dx * nx + dy * ny + dz * nz;
             const float arg = static_cast<float>(-(dist2 * inv_d2 + sim * inv_s2));
-            const double w = expNonPositiveInline(arg);
-            term_num += w * h;
-            term_den += w;
-            term_num2 += w * h * h;
-            term_den2 += w * w;
-            if (centre_term && std::abs(jv - v) <= inner_r && std::abs(ju - u) <= inner_r)
-              term_inner_den += w;
+            const double w = term.weight * expNonPositiveInline(arg);
+            to_num += w * h;
+            to_den += w;
+            to_num2 += w * h * h;
+            to_den2 += w * w;
+            if (centre_term) {
+              centre_den += w;
+              if (std::abs(jv - v) <= inner_r && std::abs(ju - u) <= inner_r)
+                centre_inner_den += w;
+            }
           }
         }
-        const double psi = term.weight;
-        if (inner_term) {
-          inner_num += psi * term_num, inner_den += psi * term_den;
-          inner_num2 += psi * term_num2, inner_den2 += psi * psi * term_den2;
-          continue;
-        }
-        if (centre_term)
-          centre_den = term_den, centre_inner_den = term_inner_den;
-        num += psi * term_num, den += psi * term_den;
-        num2 += psi * term_num2, den2 += psi * psi * term_den2;
       }
       if (inner_r < search_window / 2) {
         const double scale = centre_seen && centre_inner_den > 0.0 ? centre_den / centre_inner_den : 1.0;
