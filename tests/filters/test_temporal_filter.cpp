@@ -192,6 +192,13 @@ TEST(TemporalFilter, LiveRecursiveStreamMatchesTheDirectEvaluationAndSteadiesThe
   ASSERT_EQ(fast.size(), frames.size());
   for (std::size_t t = 0; t < frames.size(); ++t)
     EXPECT_LT(maxDistance(*fast[t], *direct[t]), 2e-5) << "frame " << t;
+  for (int threads : {1, 3}) {
+    FilterParameters q = p;
+    q.threads = threads;
+    const auto other = filterSequence<pcl::PointXYZ>(frames, 1, TemporalWindow::recursive, q);
+    for (std::size_t t = 0; t < frames.size(); ++t)
+      EXPECT_TRUE(sameBits(*other[t], *fast[t])) << threads << " threads, frame " << t;
+  }
   // Frame to frame differences of the last two outputs: the recursive stream's against the
   // single frames'.
   auto change = [](const Cloud& a, const Cloud& b) {
