@@ -3,7 +3,7 @@
 // played with `rosbag play --clock`. The node filters the bag's clouds, its diagnostics report a
 // latency measured on the bag's clock (not the wall clock the stamps of 1 s are decades behind),
 // also after that clock stops, and the topics of the features that are off are not advertised.
-#include "ros_test_support.h"
+#include "ros_node_test.h"
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
@@ -24,88 +24,6 @@ using namespace range_nlm::test;
 
 namespace
 {
-
-RosMaster* g_master = nullptr;
-
-class RosEnvironment : public ::testing::Environment
-{
-public:
-  RosEnvironment(int argc, char** argv) : argc_(argc), argv_(argv) {}
-  void SetUp() override
-  {
-    g_master = new RosMaster();
-    ros::init(argc_, argv_, "range_nlm_sample_bag_test",
-              ros::init_options::AnonymousName | ros::init_options::NoSigintHandler);
-    ASSERT_TRUE(ros::master::check()) << "no master at " << g_master->uri();
-    spinner_ = std::make_unique<ros::AsyncSpinner>(2);
-    spinner_->start();
-  }
-  void TearDown() override
-  {
-    if (spinner_)
-      spinner_->stop();
-    ros::shutdown();
-    delete g_master;
-    g_master = nullptr;
-  }
-
-private:
-  int argc_;
-  char** argv_;
-  std::unique_ptr<ros::AsyncSpinner> spinner_;
-};
-
-/// Messages received on a topic, in order.
-template <typename Message>
-class Inbox
-{
-public:
-  explicit Inbox(const std::string& topic)
-  {
-    ros::NodeHandle node;
-    subscriber_ = node.subscribe<Message>(topic, 50, [this](const typename Message::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      messages_.push_back(m);
-      arrived_.notify_all();
-    });
-  }
-  /// The next message, or null after `seconds`.
-  typename Message::ConstPtr next(double seconds)
-  {
-    std::unique_lock<std::mutex> lock(mutex_);
-    arrived_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return !messages_.empty(); });
-    if (messages_.empty())
-      return nullptr;
-    auto m = messages_.front();
-    messages_.pop_front();
-    return m;
-  }
-  std::uint32_t publishers() const { return subscriber_.getNumPublishers(); }
-
-private:
-  ros::Subscriber subscriber_;
-  std::mutex mutex_;
-  std::condition_variable arrived_;
-  std::deque<typename Message::ConstPtr> messages_;
-};
-
-bool
-advertised(const std::string& topic)
-{
-  ros::master::V_TopicInfo topics;
-  ros::master::getTopics(topics);
-  for (const auto& t : topics)
-    if (t.name == topic)
-      return true;
-  return false;
-}
-
-std::string
-readLog(const std::string& path)
-{
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
 
 /// The value of `key` in the diagnostics status whose name ends with `name`, or "".
 std::string
@@ -180,6 +98,6 @@ int
 main(int argc, char** argv)
 {
   ::testing::InitGoogleTest(&argc, argv);
-  ::testing::AddGlobalTestEnvironment(new RosEnvironment(argc, argv));
+  ::testing::AddGlobalTestEnvironment(new RosEnvironment(argc, argv, "range_nlm_sample_bag_test"));
   return RUN_ALL_TESTS();
 }

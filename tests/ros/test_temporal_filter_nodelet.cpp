@@ -5,6 +5,7 @@
 // reconfiguration between frames, diagnostics, depth and CameraInfo paired by stamp, parameters
 // read by type, misspelt parameters and a failed nodelet load.
 #include "parameter_values.h"
+#include "ros_node_test.h"
 #include "ros_test_support.h"
 #include "test_support.h"
 
@@ -42,108 +43,6 @@ using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 namespace
 {
-
-RosMaster* g_master = nullptr;
-
-/// The master for the whole test program, and this process as a ROS node.
-class RosEnvironment : public ::testing::Environment
-{
-public:
-  RosEnvironment(int argc, char** argv) : argc_(argc), argv_(argv) {}
-  void SetUp() override
-  {
-    g_master = new RosMaster();
-    ros::init(argc_, argv_, "range_nlm_test", ros::init_options::AnonymousName | ros::init_options::NoSigintHandler);
-    ASSERT_TRUE(ros::master::check()) << "no master at " << g_master->uri();
-    spinner_ = std::make_unique<ros::AsyncSpinner>(2);
-    spinner_->start();
-  }
-  void TearDown() override
-  {
-    if (spinner_)
-      spinner_->stop();
-    ros::shutdown();
-    delete g_master; // stops rosmaster
-    g_master = nullptr;
-  }
-
-private:
-  int argc_;
-  char** argv_;
-  std::unique_ptr<ros::AsyncSpinner> spinner_;
-};
-
-/// Messages received on a topic, in order.
-template <typename Message>
-class Inbox
-{
-public:
-  explicit Inbox(const std::string& topic)
-  {
-    ros::NodeHandle node;
-    subscriber_ = node.subscribe<Message>(topic, 50, [this](const typename Message::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex_);
-      messages_.push_back(m);
-      arrived_.notify_all();
-    });
-  }
-  /// The next message, or null after `seconds`.
-  typename Message::ConstPtr next(double seconds = 30.0)
-  {
-    std::unique_lock<std::mutex> lock(mutex_);
-    arrived_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return !messages_.empty(); });
-    if (messages_.empty())
-      return nullptr;
-    auto m = messages_.front();
-    messages_.pop_front();
-    return m;
-  }
-  std::size_t pending()
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return messages_.size();
-  }
-  std::uint32_t publishers() const { return subscriber_.getNumPublishers(); }
-
-private:
-  ros::Subscriber subscriber_;
-  std::mutex mutex_;
-  std::condition_variable arrived_;
-  std::deque<typename Message::ConstPtr> messages_;
-};
-
-/// Waits until `done` holds (true) or 20 s pass (false).
-template <typename Condition>
-bool
-waitFor(const Condition& done)
-{
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > deadline)
-      return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return true;
-}
-
-/// The master lists `topic` as published.
-bool
-advertised(const std::string& topic)
-{
-  ros::master::V_TopicInfo topics;
-  ros::master::getTopics(topics);
-  for (const auto& t : topics)
-    if (t.name == topic)
-      return true;
-  return false;
-}
-
-std::string
-readLog(const std::string& path)
-{
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
 
 /// Frame k of a noisy scene with a depth step and holes, w x h.
 Cloud::Ptr
