@@ -43,7 +43,7 @@ restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint
 void
 updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* start, const Viewpoint& viewpoint,
                      int max_count, int search_window, int samples, std::uint64_t seed, int threads,
-                     const NoiseProfile* known)
+                     const NoiseProfile* known, const FrameOffset* known_change)
 {
   if (start && (start->width != frame.width || start->height != frame.height))
     throw std::invalid_argument("range_nlm: the filtered frame that starts the history is " +
@@ -58,7 +58,8 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
     restart(history, frame, start, started);
     return;
   }
-  const FrameOffset change = detail::analyseFrameChange(frame, history.average, viewpoint, threads);
+  const FrameOffset change =
+      known_change ? *known_change : detail::analyseFrameChange(frame, history.average, viewpoint, threads);
   if (change.change == FrameChange::motion) {
     restart(history, frame, start, started);
     return;

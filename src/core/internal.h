@@ -227,5 +227,23 @@ struct CarriedEstimates
   int frames = 0;
 };
 
+/// A noise profile a stream carries for one frame of its window (FilterParameters::reuse_estimates):
+/// the frame's place in the window (its offset from the current frame: -1 a recursive stream's
+/// history or the previous frame) and the pass it was estimated for.
+struct CarriedProfile
+{
+  int offset = 0;
+  int iteration = 0;
+  NoiseProfile profile;
+};
+
+/// What a stream carries for the other frame at `offset` of its windows: the check (signature,
+/// parameters, age) that says whether the profiles kept for it still describe the frame there now.
+struct CarriedNeighbour
+{
+  int offset = 0;
+  CarriedEstimates check;
+};
+
 } // namespace detail
 } // namespace range_nlm

@@ -315,6 +315,8 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
   checkCoordinateScale(*given[center]);
   std::vector<const Grid*> frames = given;
   workspace.run.outliers_moved = 0; // every path below keeps it
+  workspace.run.profiles_estimated = 0;
+  workspace.frame_changes.clear();
   workspace.prior_sigma.clear();
   // The hole filling reads the frame as given after the passes, which may take its grid over.
   Grid as_given;
@@ -344,6 +346,7 @@ runFilter(const std::vector<const Grid*>& given, int center, const FilterParamet
     detail::StageTracker stage(workspace.observer, 0);
     stage.start(Stage::neighbour_frames);
     frames = detail::levelNeighbourFrames(frames, center, parameters, viewpoint, workspace);
+    detail::checkNeighbourProfiles(frames, center, parameters, viewpoint, workspace);
   }
   // A levelled frame keeps its noise profile: the levelling moves its points by a slowly varying
   // offset along the rays, which the local planes of the estimate take up.

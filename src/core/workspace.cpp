@@ -38,6 +38,13 @@ FilterWorkspace::currentProfile() const
   return workspace_->current_profile;
 }
 
+const FrameOffset*
+FilterWorkspace::frameChange(int k) const
+{
+  const std::vector<FrameOffset>& changes = workspace_->frame_changes;
+  return k >= 0 && static_cast<std::size_t>(k) < changes.size() ? &changes[static_cast<std::size_t>(k)] : nullptr;
+}
+
 std::vector<Grid>&
 FilterWorkspace::inputs()
 {

@@ -68,6 +68,9 @@ struct Workspace
   /// and per frame whether it moved against the current one (-1: not analysed).
   std::vector<Grid> leveled;
   std::vector<signed char> frames_moved;
+  /// analyseFrameChange of each other frame against the current one as the levelling made it in
+  /// the last call (per frame of the window; empty: none made).
+  std::vector<FrameOffset> frame_changes;
   /// Padded planes of the normal fits and of the windowed evaluation.
   std::vector<float> normal_planes, window_planes;
   /// The current frame's noise profile as the running call was given the frame, estimated once
@@ -83,6 +86,14 @@ struct Workspace
   detail::CarriedEstimates estimates;
   int known_dilation = 0, chosen_dilation = 0;
   std::vector<float> signature_scratch;
+  /// The noise profiles carried per frame of the window and per pass (estimateFrame): one list for
+  /// the runs on the whole frame, [0], and one per phase of the dilated passes, [1 + phase]; the
+  /// checks of the other frames they stand for; and the list the runs on this workspace read and
+  /// add to in the running call (null: every profile is estimated; set by runFilter for its own
+  /// runs and by the dilated passes for each phase's).
+  std::vector<std::vector<detail::CarriedProfile>> carried_profiles;
+  std::vector<detail::CarriedNeighbour> carried_neighbours;
+  std::vector<detail::CarriedProfile>* profiles = nullptr;
   /// If set, told where each phase of a run begins and ends. Not owned.
   StageObserver* observer = nullptr;
 };

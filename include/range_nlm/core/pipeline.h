@@ -210,13 +210,14 @@ struct RunningAverage
 /// from start's point, counted as max_count - 1 frames (so that the next frames come in with
 /// weight 1 / max_count), or from the frame's point, counted as 1, where start has none. The
 /// profile is `profile` if given (the one the filter used for the frame, so that a frame's noise is
-/// estimated once), else estimateNoiseProfile(frame, search_window, samples, seed). By `threads`
+/// estimated once), else estimateNoiseProfile(frame, search_window, samples, seed); the change is
+/// `change` if given (the filter's analysis of the same two frames), else analyseFrameChange. By `threads`
 /// threads (0 = OpenMP's default), with the same result. Throws std::invalid_argument if start's
 /// size is not the frame's.
 void
 updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* start, const Viewpoint& viewpoint,
                      int max_count, int search_window, int samples, std::uint64_t seed, int threads,
-                     const NoiseProfile* profile = nullptr);
+                     const NoiseProfile* profile = nullptr, const FrameOffset* change = nullptr);
 
 /// How much larger the frame-to-frame noise of frame `b` is than its spatial noise profile says:
 /// 1.4826 x the median, over the pixels valid in both frames with a normal, of
@@ -343,6 +344,10 @@ struct FilterRun
   /// FilterParameters::reuse_estimates: the run used the estimates carried from an earlier frame
   /// (false: it estimated them, or reuse is off).
   bool estimates_reused = false;
+  /// Noise profiles the run estimated (range-adaptive bandwidths: one per frame of the window, per
+  /// pass, and per phase of dilated passes, where not carried from an earlier frame of the stream;
+  /// FilterParameters::reuse_estimates).
+  int profiles_estimated = 0;
 };
 
 /// Runs the complete filter: normals, bandwidths, offsets, displacement, `iterations` times.
@@ -426,6 +431,10 @@ public:
   /// FilterParameters::reuse_estimates); empty if the run used none (global bandwidths without the
   /// outlier stage) or failed before estimating it.
   const NoiseProfile& currentProfile() const;
+  /// analyseFrameChange(current frame, frame k) as the last run made it to level and test its
+  /// frames (the current frame as filtered: after the outlier stage), or null where it made none
+  /// (one frame, or not the guarded cross-frame bandwidths with the range-adaptive model).
+  const FrameOffset* frameChange(int k) const;
   /// Grids for the input frames (the pcl::Filter adaptors convert their clouds into them): a run
   /// whose current frame is one of them takes that grid over as the result's storage instead of
   /// copying it (its contents are not kept), unless another frame is the same grid.

@@ -59,11 +59,13 @@ TemporalStream<PointT>::remember(std::size_t t, bool filtered)
   }
   const PointCloud& frame = *held.cloud;
   const Viewpoint viewpoint{frame.sensor_origin_[0], frame.sensor_origin_[1], frame.sensor_origin_[2]};
-  // The frame's noise profile as the filter estimated (or carried) it for this frame, if it did.
+  // The frame's noise profile as the filter estimated (or carried) it for this frame, if it did,
+  // and its analysis of the frame against the history (the run's first frame, where there was one).
   const NoiseProfile* profile = filtered ? &workspace_.currentProfile() : nullptr;
+  const FrameOffset* change = filtered && !history_.empty() ? workspace_.frameChange(0) : nullptr;
   updateRunningAverage(history_, held.grid, filtered ? &start_grid_ : nullptr, viewpoint, historyLength(),
                        parameters_.search_window, parameters_.bandwidth_samples, parameters_.seed,
-                       parameters_.threads, profile);
+                       parameters_.threads, profile, change);
 }
 
 template <typename PointT>

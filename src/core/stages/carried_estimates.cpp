@@ -184,8 +184,10 @@ takeCarriedEstimates(const Grid& frame, const FilterParameters& parameters, cons
   workspace.known_dilation = 0;
   workspace.chosen_dilation = 0;
   workspace.run.estimates_reused = false;
+  workspace.profiles = nullptr;
   if (!parameters.reuse_estimates || frame.countValid() == 0) {
     workspace.estimates = CarriedEstimates();
+    forgetFrameProfiles(workspace);
     return EstimateSignature();
   }
   const EstimateSignature signature = estimateSignature(frame, viewpoint, workspace.signature_scratch);
@@ -195,8 +197,76 @@ takeCarriedEstimates(const Grid& frame, const FilterParameters& parameters, cons
     workspace.known_dilation = carried.dilation;
     workspace.run.estimates_reused = true;
     ++carried.frames;
+  } else {
+    // Estimates made afresh for the current frame, for the other frames too: what the profiles
+    // were kept for (the dilation's phases, the sensor) may have changed with it.
+    forgetFrameProfiles(workspace);
   }
+  workspace.carried_profiles.resize(std::max<std::size_t>(1, workspace.carried_profiles.size()));
+  workspace.profiles = &workspace.carried_profiles.front();
   return signature;
+}
+
+void
+forgetFrameProfiles(Workspace& workspace)
+{
+  workspace.carried_profiles.clear();
+  workspace.carried_neighbours.clear();
+}
+
+void
+checkNeighbourProfiles(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                       const Viewpoint& viewpoint, Workspace& workspace)
+{
+  if (!workspace.profiles)
+    return; // nothing carried in this call
+  for (int k = 0; k < static_cast<int>(frames.size()); ++k) {
+    if (k == center || !frames[k])
+      continue;
+    const int offset = k - center;
+    auto slot = std::find_if(workspace.carried_neighbours.begin(), workspace.carried_neighbours.end(),
+                             [offset](const CarriedNeighbour& n) { return n.offset == offset; });
+    if (slot == workspace.carried_neighbours.end())
+      slot = workspace.carried_neighbours.insert(slot, CarriedNeighbour{offset, CarriedEstimates()});
+    const Grid& frame = *frames[k];
+    const EstimateSignature signature = frame.countValid() > 0
+                                            ? estimateSignature(frame, viewpoint, workspace.signature_scratch)
+                                            : EstimateSignature();
+    CarriedEstimates& check = slot->check;
+    if (signature.width > 0 && carriedEstimatesHold(check, signature, frame, parameters)) {
+      ++check.frames;
+      continue;
+    }
+    // The frame at this place of the window is not the one the profiles were kept for.
+    for (std::vector<CarriedProfile>& list : workspace.carried_profiles)
+      list.erase(std::remove_if(list.begin(), list.end(), [offset](const CarriedProfile& c) { return c.offset == offset; }),
+                 list.end());
+    check = CarriedEstimates();
+    if (signature.width > 0) {
+      check.valid = true;
+      check.signature = signature;
+      check.parameters = parameters;
+      check.frames = 1;
+    }
+  }
+}
+
+const NoiseProfile*
+carriedProfile(const Workspace& workspace, int offset, int iteration)
+{
+  if (!workspace.profiles)
+    return nullptr;
+  for (const CarriedProfile& c : *workspace.profiles)
+    if (c.offset == offset && c.iteration == iteration)
+      return &c.profile;
+  return nullptr;
+}
+
+void
+keepProfile(Workspace& workspace, int offset, int iteration, const NoiseProfile& profile)
+{
+  if (workspace.profiles)
+    workspace.profiles->push_back(CarriedProfile{offset, iteration, profile});
 }
 
 void

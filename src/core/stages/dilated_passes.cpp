@@ -205,6 +205,11 @@ filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, in
   else
     buffers.active->clear();
   Workspace& phase = *buffers.workspace;
+  // The profiles carried for this phase of the frames (FilterParameters::reuse_estimates).
+  Workspace& workspace = run.workspace;
+  phase.profiles = workspace.profiles
+                       ? &workspace.carried_profiles[1 + static_cast<std::size_t>(v0) * run.k + static_cast<std::size_t>(u0)]
+                       : nullptr;
   if (split)
     split->stop();
   try {
@@ -217,7 +222,6 @@ filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, in
   if (split)
     split->start(Stage::dilation);
   // Each phase writes its own pixels only, so phases may merge side by side.
-  Workspace& workspace = run.workspace;
   mergePhase(phase.run.output, run.k, u0, v0, workspace.merged, threads);
   if (run.parameters.uncertainty) {
     mergePhaseValues(phase.height_sigma, phase.run.output, run.k, u0, v0, input.width, workspace.prior_sigma,
@@ -324,10 +328,22 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
   if (side_by_side)
     coarse.threads = 1; // each phase's run on its own thread
   const PhaseRun run{frames, center, parameters, coarse, viewpoint, active, k, workspace};
+  if (workspace.profiles) {
+    // One list of carried profiles per phase, besides the whole frame's (the first).
+    const std::size_t lists = 1 + static_cast<std::size_t>(k) * static_cast<std::size_t>(k);
+    if (workspace.carried_profiles.size() < lists) {
+      workspace.carried_profiles.resize(lists);
+      workspace.profiles = &workspace.carried_profiles.front();
+    }
+  }
+  for (Workspace& phase : workspace.phase)
+    phase.run.profiles_estimated = 0;
   if (side_by_side)
     filterPhasesSideBySide(run, threads);
   else
     filterPhasesInTurn(run, threads, split);
+  for (Workspace& phase : workspace.phase)
+    workspace.run.profiles_estimated += phase.run.profiles_estimated;
   split.stop();
   finishDilatedPasses(frames, center, parameters, viewpoint, active, workspace);
 }

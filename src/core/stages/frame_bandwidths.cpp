@@ -36,6 +36,23 @@ medianRange(const FrameContext& ctx, const Grid& g, const std::vector<float>& rh
   return medianOfNonNegative(rho.data(), g.valid.data(), g.size(), ctx.threads);
 }
 
+/// Frame k's (points `g`) noise profile: the one carried for its place in the window and this pass
+/// (FilterParameters::reuse_estimates, workspace.profiles), else estimated with `seed` and kept
+/// there for the stream's next frames.
+NoiseProfile
+frameProfile(FrameContext& ctx, int k, const Grid& g, std::uint64_t seed)
+{
+  Workspace& workspace = ctx.workspace;
+  const int offset = k - ctx.center;
+  if (const NoiseProfile* carried = carriedProfile(workspace, offset, ctx.iteration))
+    return *carried;
+  NoiseProfile profile = estimateNoiseProfile(g, ctx.parameters.search_window, ctx.parameters.bandwidth_samples,
+                                              seed, ctx.viewpoint, ctx.threads);
+  ++workspace.run.profiles_estimated;
+  keepProfile(workspace, offset, ctx.iteration, profile);
+  return profile;
+}
+
 /// Frame k's (points `g`) bandwidths into ctx.bandwidths[k]: from its noise profile at range
 /// `rho_median` (range-adaptive model; the profile into ctx.profiles[k]), else from `normals`
 /// (global model; null: g's raw normals, fitted into the current frame's buffer, which is
@@ -52,8 +69,7 @@ estimateFrame(FrameContext& ctx, int k, const Grid& g, const NormalField* normal
     // sample), so that a frame's noise is estimated once per call.
     const bool as_given = k == ctx.center && ctx.iteration == 0 && ctx.frames[k] == ctx.workspace.profiled;
     ctx.profiles[k] = as_given ? currentFrameProfile(g, parameters, ctx.viewpoint, ctx.workspace)
-                               : estimateNoiseProfile(g, parameters.search_window, parameters.bandwidth_samples, seed,
-                                                      ctx.viewpoint, ctx.threads);
+                               : frameProfile(ctx, k, g, seed);
     Bandwidths b;
     b.sigma_s = ctx.profiles[k].sigmaAt(rho_median);
     b.mu_d = ctx.profiles[k].extentAt(rho_median) * rho_median;
@@ -78,9 +94,11 @@ detail::currentFrameProfile(const Grid& frame, const FilterParameters& parameter
                             Workspace& workspace)
 {
   NoiseProfile& profile = workspace.current_profile;
-  if (profile.empty())
+  if (profile.empty()) {
     profile = estimateNoiseProfile(frame, parameters.search_window, parameters.bandwidth_samples, parameters.seed,
                                    viewpoint, resolveThreads(parameters.threads));
+    ++workspace.run.profiles_estimated;
+  }
   return profile;
 }
 

@@ -90,14 +90,17 @@ levelFrame(const Grid& from, const float* o, const std::vector<float>& mean, con
 /// not move, are averaged out. Fills `leveled` and `out` and returns true if some neighbour
 /// had such an offset; otherwise returns false and leaves the frames as they are. `moved`
 /// receives per frame whether it moved (1) or not (0, an offset counts as not moved), -1 for the
-/// current frame and an empty one; it is left empty where nothing was analysed.
+/// current frame and an empty one; it is left empty where nothing was analysed. `changes`
+/// receives the analyses (a default FrameOffset for the current frame and an empty one), or
+/// nothing where nothing was analysed.
 bool
 levelFrames(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
             const Viewpoint& viewpoint, int threads, std::vector<Grid>& leveled, std::vector<const Grid*>& out,
-            std::vector<signed char>& moved)
+            std::vector<signed char>& moved, std::vector<FrameOffset>& changes)
 {
   const int count = static_cast<int>(frames.size());
   moved.clear();
+  changes.clear();
   if (count < 2 || parameters.bandwidth_model != BandwidthModel::range_adaptive ||
       parameters.cross_frame_bandwidth != CrossFrameBandwidth::guarded)
     return false;
@@ -107,14 +110,16 @@ levelFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
       return false; // runContiguous reports it
   if (current.countValid() == 0)
     return false;
-  const FrameChanges c = analyseNeighbours(frames, center, viewpoint, threads);
+  FrameChanges c = analyseNeighbours(frames, center, viewpoint, threads);
   // The motion test's answer for every frame of the run (an offset is levelled: not moved).
   moved.assign(count, -1);
   for (int k = 0; k < count; ++k)
     if (k != center && frames[k]->countValid() > 0)
       moved[k] = !c.still[k];
-  if (!c.any_offset)
+  if (!c.any_offset) {
+    changes = std::move(c.changes);
     return false;
+  }
   const std::vector<float> mean = meanLevel(c, current.size(), threads);
   leveled.resize(count);
   out = frames;
@@ -125,6 +130,7 @@ levelFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
     levelFrame(*frames[k], o, mean, viewpoint, threads, leveled[k]);
     out[k] = &leveled[k];
   }
+  changes = std::move(c.changes);
   return true;
 }
 
@@ -137,7 +143,7 @@ detail::levelNeighbourFrames(const std::vector<const Grid*>& frames, int center,
 {
   std::vector<const Grid*> leveled;
   if (!levelFrames(frames, center, parameters, viewpoint, resolveThreads(parameters.threads), workspace.leveled,
-                   leveled, workspace.frames_moved))
+                   leveled, workspace.frames_moved, workspace.frame_changes))
     leveled = frames;
   return leveled;
 }

@@ -285,6 +285,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
                   ? currentFrameProfile(input, parameters, viewpoint, workspace)
                   : estimateNoiseProfile(input, parameters.search_window, parameters.bandwidth_samples,
                                          parameters.seed, viewpoint, threads);
+    workspace.run.profiles_estimated += &input != workspace.profiled;
   } catch (const UnfilterableFrame&) {
     stage.stop();
     runOneScale(frames, center, fine, viewpoint, active, workspace); // reports it
@@ -306,6 +307,8 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
   Workspace& coarse = workspace.levels.front();
   coarse.observer = workspace.observer;
   coarse.frames_moved = workspace.frames_moved;
+  coarse.profiles = nullptr; // the coarser scales' profiles are estimated on every call
+  coarse.run.profiles_estimated = 0;
   stage.stop();
   const FilterParameters coarse_parameters = coarserParameters(parameters, scales);
   try {
@@ -317,6 +320,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
     runOneScale(frames, center, fine, viewpoint, active, workspace);
     return;
   }
+  workspace.run.profiles_estimated += coarse.run.profiles_estimated;
   stage.start(Stage::pyramid);
   coarseCorrections(reduced[center], coarse.run.output, viewpoint, threads, workspace.pyramid_rho,
                     workspace.pyramid_correction);

@@ -29,6 +29,27 @@ takeCarriedEstimates(const Grid& frame, const FilterParameters& parameters, cons
 void
 keepEstimates(const EstimateSignature& signature, const FilterParameters& parameters, Workspace& workspace);
 
+/// FilterParameters::reuse_estimates: drops every noise profile carried for the frames of the
+/// windows (the current frame's in the dilation's phases, the other frames'). (carried_estimates.cpp)
+void
+forgetFrameProfiles(Workspace& workspace);
+
+/// FilterParameters::reuse_estimates, once per call after the levelling: for each other frame of
+/// the window, whether the profiles carried for its place (its offset from the current frame) still
+/// hold, by the check carriedEstimatesHold makes of the current frame; where not, they are dropped
+/// and the frame's signature is kept for the next calls. (carried_estimates.cpp)
+void
+checkNeighbourProfiles(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
+                       const Viewpoint& viewpoint, Workspace& workspace);
+
+/// The noise profile carried in workspace.profiles for the frame at `offset` from the current one
+/// in pass `iteration`, or null (none carried, or nothing carried in this call). And keepProfile
+/// adds one there (nothing if no list is in use). (carried_estimates.cpp)
+const NoiseProfile*
+carriedProfile(const Workspace& workspace, int offset, int iteration);
+void
+keepProfile(Workspace& workspace, int offset, int iteration, const NoiseProfile& profile);
+
 /// The signature of `frame` (`scratch` holds its samples). (carried_estimates.cpp)
 EstimateSignature
 estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float>& scratch);
@@ -62,7 +83,8 @@ correctOutliersStage(const Grid& input, const NoiseProfile& profile, const Filte
 
 /// The frames with low-frequency offsets between them levelled (levelFrames) in
 /// workspace.leveled, or `frames` as they are; workspace.frames_moved receives the frames'
-/// motion analysis. (level_frames.cpp)
+/// motion analysis, and workspace.frame_changes each frame's analyseFrameChange against the
+/// current frame (empty where none was made). (level_frames.cpp)
 std::vector<const Grid*>
 levelNeighbourFrames(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
                      const Viewpoint& viewpoint, Workspace& workspace);

@@ -214,3 +214,87 @@ TEST(CarriedEstimates, TheCheckAgreesWithItsOwnFrame)
   EXPECT_EQ(none.near.scale, 0.0f);
   EXPECT_FALSE(detail::carriedEstimatesHold(carried, none, empty, live()));
 }
+
+/// live() with dilation k (0: automatic).
+FilterParameters
+liveDilated(int k, int threads = 2)
+{
+  FilterParameters p = live(threads);
+  p.dilation = k;
+  return p;
+}
+
+// Every noise profile of a stream's runs is carried: the current frame's in each of the 4 phases
+// of dilation 2 as well as on the whole frame, so that after the first frame a static stream
+// estimates none.
+TEST(CarriedEstimates, EveryProfileOfAStaticStreamIsCarried)
+{
+  for (int k : {0, 2})
+    for (const char* noise : {"kinect", "stereo"}) {
+      const std::vector<Grid> frames = sequence(noise, 4);
+      FilterWorkspace workspace;
+      std::vector<int> estimated;
+      for (const Grid& frame : frames) {
+        runFilter({&frame}, 0, liveDilated(k), kOrigin, {}, workspace);
+        estimated.push_back(workspace.result().profiles_estimated);
+      }
+      EXPECT_GE(estimated[0], k == 2 ? 5 : 1) << noise << ", dilation " << k;
+      EXPECT_EQ(estimated, (std::vector<int>{estimated[0], 0, 0, 0})) << noise << ", dilation " << k;
+      FilterParameters p = liveDilated(k);
+      p.reuse_estimates = false;
+      runFilter({&frames[1]}, 0, p, kOrigin, {}, workspace);
+      EXPECT_EQ(workspace.result().profiles_estimated, estimated[0]) << noise << ", dilation " << k;
+    }
+}
+
+// The other frame of a window (a recursive stream's history) keeps its profile while a check of it
+// agrees with the frame the profile was made on: a fresh draw of the same sensor's noise there
+// gets the carried profile (its bandwidths to the bit, where a fresh estimate differs); a frame
+// four times as noisy gets a fresh profile, and so the bandwidths a fresh run gives it.
+TEST(CarriedEstimates, AWindowsOtherFrameKeepsItsProfileUntilItChanges)
+{
+  for (const char* noise : {"kinect", "stereo"}) {
+    const std::vector<Grid> current = sequence(noise, 3);
+    const std::vector<Grid> other = sequence(noise, 2, 1.0, 23);
+    const std::vector<Grid> noisier = sequence(noise, 1, 4.0, 25);
+    const FilterParameters p = liveDilated(noise[0] == 's' ? 2 : 0);
+    FilterWorkspace workspace;
+    runFilter({&other[0], &current[0]}, 1, p, kOrigin, {}, workspace);
+
+    runFilter({&other[1], &current[1]}, 1, p, kOrigin, {}, workspace);
+    EXPECT_TRUE(workspace.result().estimates_reused) << noise;
+    EXPECT_EQ(workspace.result().profiles_estimated, 0) << noise;
+    // The bandwidths are the profile's at the current frame's median range.
+    const FilterRun carried = runFilter({&other[0], &current[1]}, 1, p, kOrigin, {});
+    EXPECT_EQ(workspace.result().bandwidths[0].similarity, carried.bandwidths[0].similarity) << noise;
+    const FilterRun fresh = runFilter({&other[1], &current[1]}, 1, p, kOrigin, {});
+    EXPECT_NE(fresh.bandwidths[0].similarity, carried.bandwidths[0].similarity) << noise;
+
+    runFilter({&noisier[0], &current[2]}, 1, p, kOrigin, {}, workspace);
+    EXPECT_GE(workspace.result().profiles_estimated, 1) << noise;
+    const FilterRun renewed = runFilter({&noisier[0], &current[2]}, 1, p, kOrigin, {});
+    EXPECT_EQ(workspace.result().bandwidths[0].similarity, renewed.bandwidths[0].similarity) << noise;
+    EXPECT_EQ(workspace.result().bandwidths[0].distance, renewed.bandwidths[0].distance) << noise;
+  }
+}
+
+// Windows of two frames, carried profiles and all: the same bits on 1, 2 and 3 threads.
+TEST(CarriedEstimates, WindowsGiveTheSameBitsOnOneTwoAndThreeThreads)
+{
+  const std::vector<Grid> frames = sequence("stereo", 4, 1.0, 27);
+  auto run = [&frames](int threads) {
+    FilterWorkspace workspace;
+    std::vector<Grid> outputs;
+    for (std::size_t k = 1; k < frames.size(); ++k) {
+      runFilter({&frames[k - 1], &frames[k]}, 1, liveDilated(2, threads), kOrigin, {}, workspace);
+      outputs.push_back(workspace.result().output);
+    }
+    return outputs;
+  };
+  const std::vector<Grid> one = run(1);
+  for (int threads : {2, 3}) {
+    const std::vector<Grid> more = run(threads);
+    for (std::size_t k = 0; k < one.size(); ++k)
+      EXPECT_TRUE(sameBits(more[k], one[k])) << threads << " threads, window " << k;
+  }
+}
