@@ -132,10 +132,13 @@ Options
 defaultOptions()
 {
   Options o;
-  o.scenarios.push_back(Scenario{"depth camera", "kinect", 0.0, 1});
-  o.scenarios.push_back(Scenario{"laser grade", "laser", 0.0, 1});
-  o.scenarios.push_back(Scenario{"depth camera, temporal r=1", "kinect", 0.0, 3});
-  o.scenarios.push_back(Scenario{"laser grade, temporal r=1", "laser", 0.0, 3});
+  o.scenarios.push_back(Scenario{"depth camera", "kinect", "boxes", 0.0, 1});
+  o.scenarios.push_back(Scenario{"laser grade", "laser", "boxes", 0.0, 1});
+  o.scenarios.push_back(Scenario{"depth camera, temporal r=1", "kinect", "boxes", 0.0, 3});
+  o.scenarios.push_back(Scenario{"laser grade, temporal r=1", "laser", "boxes", 0.0, 3});
+  // Steps, ridges and grooves of 2 - 5 mm: a few noise sigmas at laser grade.
+  o.scenarios.push_back(Scenario{"small features, laser grade", "laser", "ridges", 0.0, 1});
+  o.scenarios.push_back(Scenario{"small features, depth camera", "kinect", "ridges", 0.0, 1});
   return o;
 }
 
@@ -186,6 +189,7 @@ run(const Options& options, std::ostream& log)
     scene.width = scenario.width;
     scene.height = scenario.height;
     scene.noise = noiseModelFromString(scenario.noise);
+    scene.scene = sceneTypeFromString(scenario.scene);
     if (scenario.noise_scale > 0.0)
       scene.noise_scale = scenario.noise_scale;
     scene.frames = scenario.frames;

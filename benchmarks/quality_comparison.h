@@ -44,6 +44,7 @@ struct Scenario
 {
   std::string name;  // e.g. "depth camera, static"
   std::string noise; // kinect | laser | stripes
+  std::string scene = "boxes"; // boxes | ridges (small features only)
   double noise_scale = 0.0; // 0 = the model's default
   int frames = 1;    // temporal scenarios: 3 (radius 1)
   int width = 640, height = 480;

@@ -35,7 +35,7 @@ addOptions(po::options_description& options, const SceneOptions& d)
     ("output-dir", po::value<std::string>(), "output directory (required); noisy/ and truth/ are created in it")
     ("frames", po::value<int>()->default_value(d.frames), "number of frames")
     ("scene", po::value<std::string>()->default_value(toString(d.scene)),
-     "boxes (floor, wall, boxes, sphere, cylinder, ridged panel at 0.8-3 m), plane (one plane at --plane-depth) or steps (floor, wall, a staircase, a tilted and a folded panel at 0.8-3 m)")
+     "boxes (floor, wall, boxes, sphere, cylinder, ridged panel at 0.8-3 m), plane (one plane at --plane-depth), steps (floor, wall, a staircase, a tilted and a folded panel at 0.8-3 m) or ridges (one plate at 1.1 m with terraces, thin ridges and grooves of 2-5 mm)")
     ("plane-depth", po::value<double>()->default_value(d.plane_depth), "depth of the plane scene, m")
     ("width", po::value<int>()->default_value(d.width), "image width, pixels")
     ("height", po::value<int>()->default_value(d.height), "image height, pixels")

@@ -486,6 +486,50 @@ stepsShapes()
   return shapes;
 }
 
+/// The shapes of SceneType::ridges: one plate filling the view, turned to it, whose front face
+/// (local -z, toward the camera) carries every feature, so that all of them are small: boxes on
+/// the face (terraces, ridges) or layers of it cut apart (grooves). Every surface is planar and
+/// each edge and crease exact.
+std::vector<std::shared_ptr<const Shape>>
+ridgesShapes()
+{
+  std::vector<std::shared_ptr<const Shape>> shapes;
+  const Vec3 center(0.0, 0.0, 1.1);
+  const Mat3 r = rotation(15.0, 8.0);
+  // A box spanning local [x0, x1] x [y0, y1] x [z0, z1] of the plate (z = 0: the face).
+  auto slab = [&](double x0, double x1, double y0, double y1, double z0, double z1) {
+    const Vec3 local(0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1));
+    shapes.push_back(
+        std::make_shared<Box>(center + r * local, r, Vec3(0.5 * (x1 - x0), 0.5 * (y1 - y0), 0.5 * (z1 - z0))));
+  };
+  slab(-1.0, 1.0, -0.8, 0.8, 0.0, 0.03);
+  const double sizes[] = {0.002, 0.003, 0.004, 0.005};
+  // Upper left: terraces rising by 2, 3, 4 and 5 mm and falling by 5, 4, 3 and 2 mm, 45 mm apart.
+  double rise = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    rise += sizes[i];
+    slab(-0.5 + 0.045 * i, -0.05 - 0.045 * i, -0.38, -0.03, -rise, 0.0);
+  }
+  // Upper right: ridges 4 mm wide and 2, 3, 4 and 5 mm high, 60 mm apart.
+  for (int i = 0; i < 4; ++i) {
+    const double x = 0.08 + 0.06 * i;
+    slab(x - 0.002, x + 0.002, -0.38, -0.03, -sizes[i], 0.0);
+  }
+  // Lower half: a layer 5 mm proud of the face (a 5 mm step along its top edge) with grooves 6 mm
+  // wide and 2, 3, 4 and 5 mm deep, 100 mm apart.
+  const double layer = 0.005;
+  double x = -0.6;
+  for (int i = 0; i < 4; ++i) {
+    const double g = -0.3 + 0.1 * i;
+    slab(x, g - 0.003, 0.03, 0.5, -layer, 0.0);
+    if (layer - sizes[i] > 0.0)
+      slab(g - 0.003, g + 0.003, 0.03, 0.5, -(layer - sizes[i]), 0.0);
+    x = g + 0.003;
+  }
+  slab(x, 0.6, 0.03, 0.5, -layer, 0.0);
+  return shapes;
+}
+
 /// Uniform in [0, 1) from the top 53 bits: the same sequence on every platform.
 double
 uniform(std::mt19937_64& rng)
@@ -808,7 +852,9 @@ sceneTypeFromString(const std::string& name)
     return SceneType::plane;
   if (name == "steps")
     return SceneType::steps;
-  throw std::invalid_argument("unknown scene '" + name + "' (expected boxes, plane or steps)");
+  if (name == "ridges")
+    return SceneType::ridges;
+  throw std::invalid_argument("unknown scene '" + name + "' (expected boxes, plane, steps or ridges)");
 }
 
 NoiseModel
@@ -852,6 +898,8 @@ toString(SceneType scene)
     return "plane";
   case SceneType::steps:
     return "steps";
+  case SceneType::ridges:
+    return "ridges";
   }
   return "unknown";
 }
@@ -998,6 +1046,10 @@ Scene::build(const SceneOptions& options, int frame)
   }
   if (options.scene == SceneType::steps) {
     scene.shapes_ = stepsShapes();
+    return scene;
+  }
+  if (options.scene == SceneType::ridges) {
+    scene.shapes_ = ridgesShapes();
     return scene;
   }
   // Room: floor at y = 0.7 m (1.5 m - 3 m deep in view), back wall at z = 3 m; both finite, so

@@ -32,7 +32,12 @@ enum class SceneType
   /// Depth edges and creases, all planar, at depths 0.8 m - 3 m: floor and back wall (finite
   /// rectangles), a staircase of three steps of uneven height (0.10, 0.22, 0.30 m) turned 30
   /// degrees, a panel tilted 50 degrees to the view and a folded panel with a concave crease.
-  steps
+  steps,
+  /// Small features only, all planar: one plate filling the view at about 1.1 m, turned 15 degrees,
+  /// whose face carries terraces rising and falling by 2 - 5 mm, ridges 4 mm wide and 2 - 5 mm high,
+  /// and a layer 5 mm proud with grooves 6 mm wide and 2 - 5 mm deep. Features of a few noise
+  /// sigmas at laser-grade noise, of about one at depth-camera noise.
+  ridges
 };
 
 /// Depth-sensor noise added to the noisy frame. The depth error e moves a point along its camera
