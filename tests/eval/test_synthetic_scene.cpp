@@ -1,5 +1,6 @@
 // Tests of the synthetic range-frame generator: exact geometry, noise statistics, determinism,
 // dropouts and motion.
+#include <range_nlm/eval/metrics.h>
 #include <range_nlm/eval/synthetic_scene.h>
 
 #include "test_support.h"
@@ -256,6 +257,56 @@ TEST(SyntheticScene, StepsSceneShowsEveryShapeOverTheDepthRange)
   EXPECT_LT(z_min, 0.9f);
   EXPECT_GT(z_max, 2.9f);
   EXPECT_LE(z_max, 3.0f + 1e-5f);
+}
+
+TEST(SyntheticScene, RidgesTruthPointsLieOnTheirAnalyticSurfacesWithUnitNormals)
+{
+  SceneOptions o;
+  o.scene = SceneType::ridges;
+  o.noise = NoiseModel::none;
+  std::size_t checked = 0;
+  expectTruthOnAnalyticSurfaces(o, checked);
+  EXPECT_GT(checked, 250000u);
+}
+
+// The ridges scene: one plate fills the view, and the parts of its face seen by the camera lie at
+// every level the features give it: the face (0), the grooves' bottoms in the 5 mm layer (3, 2,
+// 1 mm proud; the deepest reaches the face), the ridges and the layer (2 - 5 mm), and the
+// terraces (2, 5, 9 and 14 mm).
+TEST(SyntheticScene, RidgesSceneShowsEveryFeatureLevel)
+{
+  SceneOptions o;
+  o.scene = SceneType::ridges;
+  o.noise = NoiseModel::none;
+  EXPECT_EQ(sceneTypeFromString("ridges"), SceneType::ridges);
+  EXPECT_EQ(toString(SceneType::ridges), "ridges");
+  const SyntheticFrame f = renderFrame(o);
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(15.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(8.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  const Eigen::Vector3d toward = -(r * Eigen::Vector3d::UnitZ()), center(0.0, 0.0, 1.1);
+  std::map<int, int> levels; // mm proud of the face -> pixels
+  std::size_t hit = 0;
+  for (std::size_t i = 0; i < f.truth.size(); ++i) {
+    if (f.shape_index[i] < 0)
+      continue;
+    ++hit;
+    const pcl::PointNormal& t = f.truth[i];
+    const Eigen::Vector3d n(t.normal_x, t.normal_y, t.normal_z), p(t.x, t.y, t.z);
+    if (n.dot(toward) > 0.9999)
+      ++levels[int(std::lround(1000.0 * toward.dot(p - center)))];
+  }
+  EXPECT_EQ(hit, f.truth.size()) << "the plate fills the view";
+  std::set<int> seen;
+  for (const auto& [level, pixels] : levels)
+    if (pixels >= 20)
+      seen.insert(level);
+  EXPECT_EQ(seen, (std::set<int>{0, 1, 2, 3, 4, 5, 9, 14}));
+  EvaluationOptions eval;
+  const std::vector<unsigned char> feature = featureMask(f.truth, eval);
+  const auto features = std::count(feature.begin(), feature.end(), 1);
+  EXPECT_GT(features, 10000) << "every riser is a crease";
+  EXPECT_LT(features, 100000);
 }
 
 TEST(SyntheticScene, RidgedPanelHasTwoFacetOrientationsThreeMillimetresHigh)
