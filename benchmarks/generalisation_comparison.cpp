@@ -57,7 +57,10 @@ cellScene(const Options& options, std::size_t scene_index, double scale, double 
   scene.noise = NoiseModel::stereo;
   scene.noise_scale = scale;
   scene.stereo_correlation_length = length;
-  scene.seed = kFirstSeed + scene_index;
+  // The seed follows the scene, not its place in the run's list.
+  const std::vector<std::string> all = Options().scenes;
+  const auto place = std::find(all.begin(), all.end(), options.scenes[scene_index]);
+  scene.seed = kFirstSeed + static_cast<std::uint64_t>(place != all.end() ? place - all.begin() : scene_index);
   return scene;
 }
 

@@ -36,8 +36,9 @@ struct Options
   /// Frame size. At other sizes than 640x480 the focal lengths are scaled by width / 640, so that
   /// the frame shows the same scene.
   int width = 640, height = 480;
-  /// Scenes ("boxes", "steps"), each with its own seed.
-  std::vector<std::string> scenes{"boxes", "steps"};
+  /// Scenes ("boxes", "steps", "ridges"), each with its own seed (kFirstSeed + its place in the
+  /// list of all three, so that a run of some of them scores the same cells).
+  std::vector<std::string> scenes{"boxes", "steps", "ridges"};
   /// Factors on the stereo model's disparity noise.
   std::vector<double> noise_scales{0.5, 1.0, 2.0};
   /// Correlation lengths of the stereo noise, pixels.

@@ -1216,6 +1216,19 @@ generalisationOptions(const po::variables_map& vm)
   std::tie(g.width, g.height) = qualitySize(vm);
   if (vm.count("generalisation-quick"))
     generalisation::makeQuick(g);
+  if (vm.count("generalisation-scenes")) {
+    const std::string list = vm["generalisation-scenes"].as<std::string>();
+    std::vector<std::string> scenes;
+    std::istringstream names(list);
+    for (std::string name; std::getline(names, name, ',');) {
+      const std::vector<std::string> known = generalisation::Options().scenes;
+      if (std::find(known.begin(), known.end(), name) == known.end())
+        throw UsageError("--generalisation-scenes '" + list + "': unknown scene '" + name +
+                         "' (expected boxes, steps or ridges, separated by commas)");
+      scenes.push_back(name);
+    }
+    g.scenes = scenes;
+  }
   if (vm.count("generalisation-setting"))
     for (const std::string& spec : vm["generalisation-setting"].as<std::vector<std::string>>()) {
       try {
@@ -1575,7 +1588,8 @@ run(int argc, char** argv)
     ("quality", "instead of timing: accuracy against ground truth on generated scenes (depth-camera and laser-grade noise, static and temporal; small features at both) of range_nlm (default, paper preset, each lever) and a parameter grid of pcl::FastBilateralFilter and pcl::MovingLeastSquares")
     ("quality-scene", po::value<std::string>(), "--quality: only the scenarios of this scene, boxes (depth-camera and laser-grade noise, static and temporal) or ridges (small features: steps, ridges and grooves of 2-5 mm, laser-grade and depth-camera noise) [default: all]")
     ("quality-size", po::value<std::string>()->default_value("640x480"), "frame size of the --quality and --generalisation scenes, WxH")
-    ("generalisation", "instead of timing: range_nlm's default (and each --generalisation-setting) against the best-balanced settings of grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares on the stereo sensor model at correlation lengths 0, 1, 2, 3, 4, 6 and 8 px and noise scales 0.5, 1 and 2, on the boxes and steps scenes (noise the default was not tuned on)")
+    ("generalisation", "instead of timing: range_nlm's default (and each --generalisation-setting) against the best-balanced settings of grids of pcl::FastBilateralFilter and pcl::MovingLeastSquares on the stereo sensor model at correlation lengths 0, 1, 2, 3, 4, 6 and 8 px and noise scales 0.5, 1 and 2, on the boxes, steps and ridges scenes (noise the default was not tuned on)")
+    ("generalisation-scenes", po::value<std::string>(), "--generalisation: only these scenes, comma-separated, of boxes, steps and ridges (each keeps its seed) [default: all three]")
     ("generalisation-quick", "--generalisation: noise scale 1 only, correlation lengths 0, 2, 4 and 8 px, without MovingLeastSquares")
     ("generalisation-setting", po::value<std::vector<std::string>>(),
      "NAME=VALUE[,NAME=VALUE...], repeatable: --generalisation also scores range_nlm's default with these fields of FilterParameters (the parameter registry) set, e.g. iterations=3")

@@ -103,7 +103,7 @@ TEST(GeneralisationComparison, QuickTableHasEveryCellAndASummaryOfItsRows)
   std::map<std::string, Tally> tally, summary;
   std::istringstream lines(r.output);
   for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("| boxes |", 0) == 0 || line.rfind("| steps |", 0) == 0) {
+    if (line.rfind("| boxes |", 0) == 0 || line.rfind("| steps |", 0) == 0 || line.rfind("| ridges |", 0) == 0) {
       const std::vector<std::string> c = cellsOf(line);
       ASSERT_EQ(c.size(), 8u) << line; // scene, scale, length, noisy, 2 settings, FastBilateral, MLS
       EXPECT_EQ(c[1], "1.0") << line;
@@ -132,18 +132,43 @@ TEST(GeneralisationComparison, QuickTableHasEveryCellAndASummaryOfItsRows)
       t.log_feature = std::log(std::stod(c[3]));
     }
   }
-  for (const std::string scene : {"boxes", "steps"})
+  for (const std::string scene : {"boxes", "steps", "ridges"})
     for (const std::string length : {"0", "2", "4", "8"})
       EXPECT_EQ(rows[scene + " " + length], 1) << scene << " L " << length << "\n" << r.output;
-  EXPECT_EQ(rows.size(), 8u) << r.output;
+  EXPECT_EQ(rows.size(), 12u) << r.output;
   for (const std::string& setting : settings) {
     SCOPED_TRACE(setting);
     ASSERT_EQ(summary.count(setting), 1u) << r.output;
-    EXPECT_EQ(summary[setting].cells, 8);
+    EXPECT_EQ(summary[setting].cells, 12);
     EXPECT_EQ(summary[setting].won, tally[setting].won);
     // The table's RMSEs are rounded to 0.01 mm: the ratios agree to about 1 %.
-    EXPECT_NEAR(summary[setting].log_flat, tally[setting].log_flat / 8, 0.02);
-    EXPECT_NEAR(summary[setting].log_feature, tally[setting].log_feature / 8, 0.02);
+    EXPECT_NEAR(summary[setting].log_flat, tally[setting].log_flat / 12, 0.02);
+    EXPECT_NEAR(summary[setting].log_feature, tally[setting].log_feature / 12, 0.02);
   }
-  EXPECT_NE(r.output.find("8 cells in "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("12 cells in "), std::string::npos) << r.output;
+}
+
+// --generalisation-scenes runs some of the scenes; each keeps its seed, so its rows are the full
+// run's to the digit. An unknown scene is refused by name.
+TEST(GeneralisationComparison, ASceneRunAloneScoresTheSameCells)
+{
+  const std::string common = "--generalisation --generalisation-quick --quality-size 96x72 --threads 2 -q";
+  const test::CommandResult all = test::runTool("range_nlm_bench", common);
+  const test::CommandResult one = test::runTool("range_nlm_bench", common + " --generalisation-scenes ridges");
+  ASSERT_EQ(all.status, 0) << all.output;
+  ASSERT_EQ(one.status, 0) << one.output;
+  auto rowsOf = [](const std::string& output, const std::string& prefix) {
+    std::vector<std::string> rows;
+    std::istringstream lines(output);
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind(prefix, 0) == 0)
+        rows.push_back(line);
+    return rows;
+  };
+  EXPECT_EQ(rowsOf(one.output, "| ridges |").size(), 4u) << one.output;
+  EXPECT_EQ(rowsOf(one.output, "| ridges |"), rowsOf(all.output, "| ridges |"));
+  EXPECT_TRUE(rowsOf(one.output, "| boxes |").empty()) << one.output;
+  const test::CommandResult bad = test::runTool("range_nlm_bench", common + " --generalisation-scenes boxes,stairs");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("unknown scene 'stairs'"), std::string::npos) << bad.output;
 }
