@@ -45,6 +45,11 @@ struct Workspace
   std::vector<std::vector<unsigned char>> phase_active;
   Grid merged;
   std::vector<Workspace> phase;
+  /// Per phase of the running call (in the order the phases are taken in turn): whether it was
+  /// filtered, and its bandwidths and frame weights.
+  std::vector<unsigned char> phase_filtered;
+  std::vector<std::vector<Bandwidths>> phase_bandwidths;
+  std::vector<std::vector<float>> phase_weights;
   /// Multiscale runs: the frames reduced to the next coarser scale, the current frame's fine
   /// pixels that entered their block's mean, ranges and corrections of the coarser scale, the
   /// current frame with the coarser scale's corrections carried up, and the workspace of the

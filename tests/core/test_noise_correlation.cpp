@@ -319,3 +319,37 @@ TEST(Dilation, PhasesSideBySideGiveTheBitsOfThePhasesInTurn)
     }
   }
 }
+
+// With one iteration (the live preset) the phases run side by side too, and the run reports the
+// last phase's bandwidths and frame weights as the phases in turn do: output, uncertainty,
+// bandwidths and weights the same bits, alone and as the newest frame of a window of two.
+TEST(Dilation, OneIterationPhasesSideBySideGiveTheBitsAndBandwidthsOfThePhasesInTurn)
+{
+  const std::vector<Grid> frames = stereoBoxesWithHoles(2);
+  ASSERT_EQ(automaticDilation(frames[1]), 2);
+  FilterParameters p = FilterParameters::live();
+  p.threads = 2;
+  p.uncertainty = true;
+  for (const std::vector<const Grid*>& window :
+       {std::vector<const Grid*>{&frames[1]}, std::vector<const Grid*>{&frames[0], &frames[1]}}) {
+    const int center = static_cast<int>(window.size()) - 1;
+    StageCounter counter;
+    FilterWorkspace in_turn, side_by_side;
+    in_turn.setStageObserver(&counter);
+    runFilter(window, center, p, kOrigin, {}, in_turn);
+    runFilter(window, center, p, kOrigin, {}, side_by_side);
+    EXPECT_EQ(counter.count(Stage::offsets), 4) << window.size() << " frames"; // the phases only
+    const FilterRun &a = in_turn.result(), &b = side_by_side.result();
+    EXPECT_TRUE(sameBits(a.output, b.output)) << window.size() << " frames";
+    EXPECT_FALSE(sameBits(b.output, *window[center])) << window.size() << " frames";
+    ASSERT_EQ(a.uncertainty.size(), b.uncertainty.size());
+    EXPECT_EQ(0, std::memcmp(a.uncertainty.data(), b.uncertainty.data(), a.uncertainty.size() * sizeof(float)));
+    ASSERT_EQ(a.bandwidths.size(), window.size());
+    ASSERT_EQ(b.bandwidths.size(), window.size());
+    for (std::size_t k = 0; k < window.size(); ++k) {
+      EXPECT_EQ(a.bandwidths[k].distance, b.bandwidths[k].distance) << k;
+      EXPECT_EQ(a.bandwidths[k].similarity, b.bandwidths[k].similarity) << k;
+    }
+    EXPECT_EQ(a.frame_weights, b.frame_weights) << window.size() << " frames";
+  }
+}

@@ -89,11 +89,16 @@ void
 finishDilatedPasses(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
                     const Viewpoint& viewpoint, const std::vector<unsigned char>& active, Workspace& workspace)
 {
-  Workspace& phase = workspace.phase.front();
   if (parameters.iterations <= 1) {
     std::swap(workspace.run.output, workspace.merged);
-    workspace.run.bandwidths = phase.run.bandwidths;
-    workspace.run.frame_weights = phase.run.frame_weights;
+    workspace.run.bandwidths = workspace.phase.front().run.bandwidths; // (no phase filtered)
+    workspace.run.frame_weights = workspace.phase.front().run.frame_weights;
+    for (std::size_t p = workspace.phase_filtered.size(); p-- > 0;)
+      if (workspace.phase_filtered[p]) {
+        workspace.run.bandwidths = workspace.phase_bandwidths[p];
+        workspace.run.frame_weights = workspace.phase_weights[p];
+        break;
+      }
     if (parameters.uncertainty)
       std::swap(workspace.run.uncertainty, workspace.phase_uncertainty);
     else
@@ -221,6 +226,12 @@ filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, in
   }
   if (split)
     split->start(Stage::dilation);
+  // Each phase's bandwidths and frame weights: with one iteration the run reports those of the
+  // last phase filtered (in the order the phases are taken in turn), whichever thread filtered it.
+  const std::size_t index = static_cast<std::size_t>(v0) * std::min(run.k, input.width) + static_cast<std::size_t>(u0);
+  workspace.phase_filtered[index] = 1;
+  workspace.phase_bandwidths[index] = phase.run.bandwidths;
+  workspace.phase_weights[index] = phase.run.frame_weights;
   // Each phase writes its own pixels only, so phases may merge side by side.
   mergePhase(phase.run.output, run.k, u0, v0, workspace.merged, threads);
   if (run.parameters.uncertainty) {
@@ -321,10 +332,9 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
     workspace.phase_uncertainty.assign(input.size(), std::numeric_limits<float>::quiet_NaN());
   }
   // Side by side where every thread gets as many phases as the others, without a stage observer
-  // (whose stages would interleave), and when a last pass follows: with one iteration the run
-  // reports the last phase's bandwidths, which only the phases in turn keep.
+  // (whose stages would interleave).
   const int phases = std::min(k, input.width) * std::min(k, input.height);
-  const bool side_by_side = threads > 1 && phases % threads == 0 && !workspace.observer && parameters.iterations > 1;
+  const bool side_by_side = threads > 1 && phases % threads == 0 && !workspace.observer;
   if (side_by_side)
     coarse.threads = 1; // each phase's run on its own thread
   const PhaseRun run{frames, center, parameters, coarse, viewpoint, active, k, workspace};
@@ -338,6 +348,10 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
   }
   for (Workspace& phase : workspace.phase)
     phase.run.profiles_estimated = 0;
+  const std::size_t phases_count = static_cast<std::size_t>(std::min(k, input.width) * std::min(k, input.height));
+  workspace.phase_filtered.assign(phases_count, 0);
+  workspace.phase_bandwidths.resize(phases_count);
+  workspace.phase_weights.resize(phases_count);
   if (side_by_side)
     filterPhasesSideBySide(run, threads);
   else
