@@ -108,8 +108,9 @@ struct FilterParameters
   /// noise's correlation length at the same cost. With k > 1 the first iterations - 1 passes
   /// (at least one) filter each phase (u mod k, v mod k) of the frame as a frame of its own, and a
   /// last pass with contiguous windows follows if iterations > 1. 0 = automatic: from the
-  /// frame's noise correlation, 1 for independent noise, 2 for correlated noise in a VGA frame,
-  /// 4 from 1280 columns on (automaticDilation in core/pipeline.h), and 1 where a phase would be
+  /// frame's noise correlation, 1 for independent noise, 2 for correlated noise in a VGA frame
+  /// (its correlation length where that is longer, up to 4), 4 from 1280 columns on, more for
+  /// strong noise (automaticDilation in core/pipeline.h), and 1 where a phase would be
   /// narrower than the windows. 1 = contiguous windows
   /// (the paper). >= 0, default 0.
   int dilation = 0;

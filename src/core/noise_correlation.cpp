@@ -30,6 +30,28 @@ detail::dilationReferenceLag(int width)
                     tuned::kDilationMinLag, tuned::kDilationMaxLag);
 }
 
+float
+noiseCorrelationLength(const NoiseCorrelation& correlation, int width)
+{
+  const int lag = detail::dilationReferenceLag(width);
+  const float near = correlation.scale[0] * correlation.scale[0];
+  const float far = correlation.scale[lag - 1] * correlation.scale[lag - 1];
+  if (!(far > 0.0f) || !(near < tuned::kCorrelatedVarianceRatio * far))
+    return 0.0f;
+  // The variance rises from lag 1 towards its plateau; the first lag where it has risen by the
+  // factor kCorrelationLengthRise, or reached that fraction of the variance at lag R (where the
+  // plateau lies within R and is less than that rise), interpolated linearly between lags.
+  const float target = std::min(tuned::kCorrelationLengthRise * near, far / tuned::kCorrelationLengthRise);
+  float previous = near;
+  for (int l = 2; l <= lag; ++l) {
+    const float v = correlation.scale[l - 1] * correlation.scale[l - 1];
+    if (v >= target)
+      return v > previous ? static_cast<float>(l - 1) + (target - previous) / (v - previous) : static_cast<float>(l);
+    previous = v;
+  }
+  return static_cast<float>(lag);
+}
+
 NoiseCorrelation
 detail::estimateNoiseCorrelation(const Grid& grid, int step, int threads)
 {

@@ -38,6 +38,12 @@
     "correlated noise: the variance at lag 1 below this share of that at lag R")                                      \
   X(kStrongNoiseFootprints, float, 3.25f, "real",                                                                     \
     "strong noise (doubles the dilation, again per doubling): between the noisiest real frame and the gaining scenes") \
+  X(kCorrelationLengthRise, float, 2.0f, "derived",                                                                   \
+    "correlation length: the lag where the variance reaches this multiple of lag 1's (or half of lag R's)")           \
+  X(kStrengthLagPerLength, float, 2.0f, "derived",                                                                    \
+    "strong noise is read at this many correlation lengths (at least R / 2): beyond the blobs, the noise's height")   \
+  X(kVeryStrongDilationFactor, float, 1.5f, "generated",                                                              \
+    "noise beyond 2 kStrongNoiseFootprints: dilation up to this times the length's (6 px blobs: 6; 8 costs features)") \
   X(kScaleSurfaceSigmas, float, 3.0f, "generated",                                                                    \
     "multiscale: points of a 2 x 2 block within this many noise sigmas lie on one surface")                           \
   X(kScaleSurfaceFootprints, float, 2.0f, "generated",                                                                \

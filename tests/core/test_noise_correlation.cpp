@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <vector>
 
 using namespace range_nlm;
 using namespace range_nlm::test;
@@ -36,8 +37,13 @@ TEST(NoiseCorrelation, AutomaticDilationIsOneForIndependentNoiseAndGrowsWithTheW
 {
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(planeScene("kinect", 640, 480)).front().noisy)), 1);
   SceneOptions stereo = planeScene("stereo", 640, 480);
-  stereo.stereo_correlation_length = 6.0;
+  stereo.stereo_correlation_length = 2.0;
+  stereo.noise_scale = 0.5;
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 2); // 2 at 640 columns
+  // Blobs of 6 px: the correlation length (about 4.4 px here), rounded, up to 4.
+  stereo.stereo_correlation_length = 6.0;
+  stereo.noise_scale = 1.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 4);
   SceneOptions wide = planeScene("stereo", 1280, 720);
   wide.stereo_correlation_length = 8.0;
   wide.stereo_correlated_share = 0.9;
@@ -50,6 +56,56 @@ TEST(NoiseCorrelation, AutomaticDilationIsOneForIndependentNoiseAndGrowsWithTheW
   // No valid point: nothing to estimate, contiguous windows.
   Grid empty(64, 48);
   EXPECT_EQ(automaticDilation(empty), 1);
+}
+
+TEST(NoiseCorrelation, CorrelationLengthGrowsWithTheNoisesCorrelationLength)
+{
+  // Independent noise: not correlated, length 0.
+  const Grid iid = gridOf(renderSequence(planeScene("kinect", 640, 480)).front().noisy);
+  EXPECT_EQ(noiseCorrelationLength(estimateNoiseCorrelation(iid), iid.width), 0.0f);
+  // The stereo model's Gaussian correlation exp(-(l / L)^2) over 80 % of the variance: the
+  // variance of the second differences doubles from lag 1 at 0.55-0.75 L.
+  float previous = 0.0f;
+  for (double length : {4.0, 6.0, 8.0}) {
+    SceneOptions stereo = planeScene("stereo", 640, 480);
+    stereo.stereo_correlation_length = length;
+    const Grid g = gridOf(renderSequence(stereo).front().noisy);
+    const float l = noiseCorrelationLength(estimateNoiseCorrelation(g), g.width);
+    EXPECT_GT(l, 0.5 * length) << length;
+    EXPECT_LT(l, 0.8 * length) << length;
+    EXPECT_GT(l, previous) << length;
+    previous = l;
+  }
+  // A curve given directly: variance 1 at lags 1 and 2, 3 at lag 3, 8 from lag 4 on: twice lag 1's
+  // at lag 2.5.
+  NoiseCorrelation c;
+  const float variances[8] = {1.0f, 1.0f, 3.0f, 8.0f, 8.0f, 8.0f, 8.0f, 8.0f};
+  for (int l = 0; l < 8; ++l)
+    c.scale[l] = std::sqrt(variances[l]);
+  EXPECT_NEAR(noiseCorrelationLength(c, 640), 2.5f, 1e-5f);
+  // Where the plateau is less than twice lag 1's (most of the noise white): half of lag R's,
+  // 1.1 here, between lags 1 and 2.
+  const float whiter[8] = {1.0f, 1.2f, 2.2f, 2.2f, 2.2f, 2.2f, 2.2f, 2.2f};
+  for (int l = 0; l < 8; ++l)
+    c.scale[l] = std::sqrt(whiter[l]);
+  EXPECT_NEAR(noiseCorrelationLength(c, 640), 1.5f, 1e-5f);
+  // Not correlated (lag 1 at least half of lag R): 0.
+  c.scale.fill(1.0f);
+  EXPECT_EQ(noiseCorrelationLength(c, 640), 0.0f);
+}
+
+TEST(NoiseCorrelation, AutomaticDilationFollowsTheCorrelationLength)
+{
+  // Half the stereo model's noise (weak: under 3.25 footprints beyond the blobs) at 640 columns:
+  // the dilation is the correlation length, rounded, from 2 up to 4.
+  SceneOptions stereo = planeScene("stereo", 640, 480);
+  stereo.noise_scale = 0.5;
+  std::vector<int> k;
+  for (double length : {2.0, 4.0, 8.0}) {
+    stereo.stereo_correlation_length = length;
+    k.push_back(automaticDilation(gridOf(renderSequence(stereo).front().noisy)));
+  }
+  EXPECT_EQ(k, (std::vector<int>{2, 3, 4}));
 }
 
 TEST(NoiseCorrelation, ScaleInFootprintsIsTheScaleOverTheDistanceBetweenRays)
@@ -86,9 +142,17 @@ TEST(NoiseCorrelation, EachDoublingOfStrongNoiseDoublesTheAutomaticDilation)
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(iid).front().noisy)), 4);
   // Correlated noise: 2 at 640 columns, 4 when strong.
   SceneOptions stereo = planeScene("stereo", 640, 480);
-  stereo.stereo_correlation_length = 6.0;
+  stereo.stereo_correlation_length = 2.0;
+  stereo.noise_scale = 0.5;
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 2);
   stereo.noise_scale = 4.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 4);
+  // Blobs of 6 px (a correlation length of about 4.3 px): 4, and 6 where the noise is strong
+  // enough for a second doubling, read at twice the correlation length (12 footprints at lag 8,
+  // 7.9 at lag 4); once strong (6 footprints at lag 8): still 4.
+  stereo.stereo_correlation_length = 6.0;
+  EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 6);
+  stereo.noise_scale = 2.0;
   EXPECT_EQ(automaticDilation(gridOf(renderSequence(stereo).front().noisy)), 4);
 }
 

@@ -254,16 +254,33 @@ struct NoiseCorrelation
 NoiseCorrelation
 estimateNoiseCorrelation(const Grid& grid, int step = 4);
 
+/// The length over which the noise of a frame `width` pixels wide is correlated, in pixels, from
+/// its NoiseCorrelation: 0 if the noise is not correlated (the variance of the second differences
+/// at lag 1 at least half of that at the reference lag R, see automaticDilation), else the lag
+/// (interpolated linearly between lags, at most R) where that variance first reaches twice its
+/// value at lag 1, or half of its value at lag R if that is less. For noise with correlation
+/// rho(l) the variance is 2 sigma^2 (3 - 4 rho(l) + rho(2 l)): flat where rho is close to 1, rising
+/// as the lag passes the correlation length, 6 sigma^2 beyond it. For the stereo model's Gaussian
+/// correlation exp(-(l / L)^2) over 80 % of the variance this is about 0.6 L.
+float
+noiseCorrelationLength(const NoiseCorrelation& correlation, int width);
+
 /// The dilation FilterParameters::dilation = 0 (automatic) gives a frame. With the reference lag
 /// R = 8 pixels per 640 columns (rounded, in [2, 8]) and the scales of estimateNoiseCorrelation:
 /// - if the variance of the second differences at lag 1 is less than half of that at lag R, the
 ///   noise is correlated over several pixels and the dilation is 2 per 640 columns (rounded, in
-///   [2, 4]: 2 in a VGA frame, 4 at 1280 columns and more); else 1;
-/// - if the noise is strong, i.e. the scale at lag R / 2 exceeds 3.25 pixel footprints
-///   (scale_in_footprints), that dilation is doubled: detail at the pixel scale does not survive
-///   such noise, and the dilated passes reach twice as far at the same cost; it is doubled again
-///   for each further doubling of the noise (6.5, 13, ... footprints), up to 4 (or twice the
-///   correlated dilation, where that is more).
+///   [2, 4]: 2 in a VGA frame, 4 at 1280 columns and more), or from 640 columns on the
+///   correlation length (noiseCorrelationLength, rounded) where that is more, up to 4: the pixels
+///   of a phase then lie about a correlation length apart; else 1;
+/// - if the noise is strong, i.e. its scale exceeds 3.25 pixel footprints (scale_in_footprints)
+///   at lag R / 2, or from 640 columns on where the noise is correlated over longer lags than
+///   that (twice the correlation length beyond 4 pixels per 640 columns) at twice the correlation
+///   length, at most R, that dilation is doubled, up to 4 (or twice the per-width dilation, where that is more):
+///   detail at the pixel scale does not survive such noise, and the dilated passes reach twice as
+///   far at the same cost; it is doubled again for each further doubling of the noise (6.5, 13,
+///   ... footprints), up to the same limit or 1.5 times a dilation the correlation length chose,
+///   where that is more (6 in a VGA frame with blobs of 6-8 pixels under twice the stereo model's
+///   noise).
 /// The correlation test scales with the width because a frame's details span more pixels the
 /// more pixels it has: a dilated 3 x 3 patch must stay small against them, and at long lags a
 /// small frame's curvature and edges, not its noise, dominate the differences.

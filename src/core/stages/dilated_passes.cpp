@@ -7,6 +7,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 #include <limits>
 
@@ -128,19 +129,39 @@ detail::automaticDilation(const Grid& frame, int threads)
   const int width = tuned::kDilationReferenceWidth, rounding = tuned::kDilationReferenceWidth / 2;
   const int lag = dilationReferenceLag(frame.width);
   const NoiseCorrelation c = detail::estimateNoiseCorrelation(frame, tuned::kDilationCorrelationStep, threads);
-  const float near = c.scale[0] * c.scale[0], far = c.scale[lag - 1] * c.scale[lag - 1];
-  const int k = far > 0.0f && near < tuned::kCorrelatedVarianceRatio * far
-                    ? std::clamp((tuned::kDilationPerWidth * frame.width + rounding) / width, tuned::kDilationMin,
-                                 tuned::kDilationMax)
-                    : 1;
+  // Correlated noise: 2 per reference width, or the correlation length where that is longer (the
+  // phases' pixels k apart then lie about a correlation length apart), up to kDilationMax.
+  // Below the reference width the lags beyond a few pixels see the frame's curvature and edges
+  // more than its noise: the length is not used there.
+  const float length = noiseCorrelationLength(c, frame.width);
+  const float used = frame.width >= width ? length : 0.0f;
+  const int per_width = std::clamp((tuned::kDilationPerWidth * frame.width + rounding) / width,
+                                   tuned::kDilationMin, tuned::kDilationMax);
+  const int k = length > 0.0f ? std::clamp(std::max(per_width, static_cast<int>(std::lround(used))),
+                                           tuned::kDilationMin, tuned::kDilationMax)
+                              : 1;
   // Strong noise: the dilation doubles for each doubling of the noise beyond kStrongNoiseFootprints
-  // pixel footprints at half the reference lag (the window's reach grows with the noise's height),
-  // the second and further doublings only up to kDilationMax (or the doubled correlated dilation).
-  const float footprints = c.scale_in_footprints[lag / 2 - 1];
+  // pixel footprints (the window's reach grows with the noise's height). The height is read at
+  // half the reference lag, or where the noise is correlated over longer lags than the reference
+  // width's R / 2 allows for, at kStrengthLagPerLength correlation lengths (at most R): within a
+  // blob the second differences see only part of the noise.
+  const float nominal_half = 0.5f * tuned::kDilationReferenceLag * frame.width / width;
+  const float reach = std::max(1.0f, tuned::kStrengthLagPerLength * used / nominal_half);
+  const int strength_lag = std::clamp(static_cast<int>(std::lround(lag / 2 * reach)), lag / 2, lag);
+  const float footprints = c.scale_in_footprints[strength_lag - 1];
   int strong = 1;
   for (float limit = tuned::kStrongNoiseFootprints; footprints > limit && strong < 1024; limit *= 2.0f)
     strong *= 2;
-  return strong <= 2 ? strong * k : std::min(strong * k, std::max(tuned::kDilationMax, 2 * k));
+  if (strong == 1)
+    return k;
+  // The first doubling up to kDilationMax (or twice the per-width dilation, where that is more);
+  // the further ones also up to kVeryStrongDilationFactor times a dilation the correlation length
+  // chose: blobs that long, under noise that high, leave no detail a patch that wide would lose.
+  const int limit = std::max(tuned::kDilationMax, 2 * std::min(k, per_width));
+  if (strong == 2)
+    return std::min(2 * k, limit);
+  return std::min(strong * k,
+                  std::max(limit, static_cast<int>(tuned::kVeryStrongDilationFactor * static_cast<float>(k))));
 }
 
 int
