@@ -205,6 +205,15 @@ struct PhaseRun
   Workspace& workspace; // merged, prior_sigma, phase_uncertainty
 };
 
+/// The index of phase (u0, v0) in the order the phases are taken in turn (row by row of the
+/// k x k phases, at most as many columns as the frame has).
+std::size_t
+phaseIndex(const PhaseRun& run, int u0, int v0)
+{
+  const int columns = std::min(run.k, run.frames[run.center]->width);
+  return static_cast<std::size_t>(v0) * static_cast<std::size_t>(columns) + static_cast<std::size_t>(u0);
+}
+
 /// Buffers of one phase at a time: its frames, its selection and its workspace.
 struct PhaseBuffers
 {
@@ -233,9 +242,8 @@ filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, in
   Workspace& phase = *buffers.workspace;
   // The profiles carried for this phase of the frames (FilterParameters::reuse_estimates).
   Workspace& workspace = run.workspace;
-  phase.profiles = workspace.profiles
-                       ? &workspace.carried_profiles[1 + static_cast<std::size_t>(v0) * run.k + static_cast<std::size_t>(u0)]
-                       : nullptr;
+  const std::size_t index = phaseIndex(run, u0, v0);
+  phase.profiles = workspace.profiles ? &workspace.carried_profiles[1 + index] : nullptr;
   if (split)
     split->stop();
   try {
@@ -249,7 +257,6 @@ filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, in
     split->start(Stage::dilation);
   // Each phase's bandwidths and frame weights: with one iteration the run reports those of the
   // last phase filtered (in the order the phases are taken in turn), whichever thread filtered it.
-  const std::size_t index = static_cast<std::size_t>(v0) * std::min(run.k, input.width) + static_cast<std::size_t>(u0);
   workspace.phase_filtered[index] = 1;
   workspace.phase_bandwidths[index] = phase.run.bandwidths;
   workspace.phase_weights[index] = phase.run.frame_weights;
@@ -359,20 +366,17 @@ detail::runDilatedPasses(const std::vector<const Grid*>& frames, int center, con
   if (side_by_side)
     coarse.threads = 1; // each phase's run on its own thread
   const PhaseRun run{frames, center, parameters, coarse, viewpoint, active, k, workspace};
-  if (workspace.profiles) {
+  const std::size_t count = static_cast<std::size_t>(phases);
+  if (workspace.profiles && workspace.carried_profiles.size() < 1 + count) {
     // One list of carried profiles per phase, besides the whole frame's (the first).
-    const std::size_t lists = 1 + static_cast<std::size_t>(k) * static_cast<std::size_t>(k);
-    if (workspace.carried_profiles.size() < lists) {
-      workspace.carried_profiles.resize(lists);
-      workspace.profiles = &workspace.carried_profiles.front();
-    }
+    workspace.carried_profiles.resize(1 + count);
+    workspace.profiles = &workspace.carried_profiles.front();
   }
   for (Workspace& phase : workspace.phase)
     phase.run.profiles_estimated = 0;
-  const std::size_t phases_count = static_cast<std::size_t>(std::min(k, input.width) * std::min(k, input.height));
-  workspace.phase_filtered.assign(phases_count, 0);
-  workspace.phase_bandwidths.resize(phases_count);
-  workspace.phase_weights.resize(phases_count);
+  workspace.phase_filtered.assign(count, 0);
+  workspace.phase_bandwidths.resize(count);
+  workspace.phase_weights.resize(count);
   if (side_by_side)
     filterPhasesSideBySide(run, threads);
   else
