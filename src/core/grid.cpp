@@ -8,6 +8,12 @@
 namespace range_nlm
 {
 
+namespace
+{
+/// Points from which countValid counts in parallel (below, starting the threads costs more).
+constexpr std::ptrdiff_t kParallelCount = 1 << 16;
+} // namespace
+
 Grid::Grid(int w, int h) : width(w), height(h)
 {
   const std::size_t n = size();
@@ -21,9 +27,13 @@ Grid::Grid(int w, int h) : width(w), height(h)
 std::size_t
 Grid::countValid() const
 {
+  // Called on whole frames several times per filter call: in parallel (an exact integer sum).
   std::size_t count = 0;
-  for (unsigned char v : valid)
-    count += v;
+  const unsigned char* __restrict flags = valid.data();
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(valid.size());
+#pragma omp parallel for simd schedule(static) reduction(+ : count) if (n >= kParallelCount)
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    count += flags[i];
   return count;
 }
 
@@ -96,6 +106,29 @@ Grid::updateValidity()
     valid[i] = ok ? 1 : 0;
     if (!ok)
       x[i] = y[i] = z[i] = nan;
+  }
+}
+
+void
+Grid::assignValidated(const Grid& from)
+{
+  width = from.width;
+  height = from.height;
+  const std::size_t n = from.x.size();
+  x.resize(n);
+  y.resize(n);
+  z.resize(n);
+  valid.resize(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    const float px = from.x[i], py = from.y[i], pz = from.z[i];
+    const bool ok = std::isfinite(px) && std::isfinite(py) && std::isfinite(pz);
+    x[i] = ok ? px : nan;
+    y[i] = ok ? py : nan;
+    z[i] = ok ? pz : nan;
+    valid[i] = ok ? 1 : 0;
   }
 }
 

@@ -30,12 +30,21 @@ startOver(RunningAverage& history, const Grid& frame, const Grid* start, std::ui
 
 /// Every pixel's history starts over.
 void
-restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started)
+restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started, int threads)
 {
-  history.average = frame;
-  history.count.resize(frame.size());
-  for (std::size_t i = 0; i < frame.size(); ++i)
-    startOver(history, frame, start, started, i);
+  Grid& h = history.average;
+  h.width = frame.width;
+  h.height = frame.height;
+  const std::size_t n = frame.size();
+  h.x.resize(n);
+  h.y.resize(n);
+  h.z.resize(n);
+  h.valid.resize(n);
+  history.count.resize(n);
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i)
+    startOver(history, frame, start, started, static_cast<std::size_t>(i));
 }
 
 } // namespace
@@ -55,13 +64,13 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   const std::uint16_t started = static_cast<std::uint16_t>(std::max(1, max_count - 1));
   if (history.empty() || history.average.width != frame.width || history.average.height != frame.height ||
       frame.countValid() == 0 || history.average.countValid() == 0) {
-    restart(history, frame, start, started);
+    restart(history, frame, start, started, threads);
     return;
   }
   const FrameOffset change =
       known_change ? *known_change : detail::analyseFrameChange(frame, history.average, viewpoint, threads);
   if (change.change == FrameChange::motion) {
-    restart(history, frame, start, started);
+    restart(history, frame, start, started, threads);
     return;
   }
   const std::size_t n = frame.size();
@@ -74,7 +83,7 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
       estimated = detail::estimateNoiseProfile(frame, search_window, samples, seed, viewpoint, threads);
     } catch (const UnfilterableFrame&) {
       // Too few points to tell noise from change (a nearly covered lens): start over from the frame.
-      restart(history, frame, start, started);
+      restart(history, frame, start, started, threads);
       return;
     }
   }

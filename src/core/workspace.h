@@ -90,7 +90,7 @@ struct Workspace
   /// automatic dilation the running call chose (0: none), and the check's sampled ranges.
   detail::CarriedEstimates estimates;
   int known_dilation = 0, chosen_dilation = 0;
-  std::vector<float> signature_scratch;
+  std::vector<float> signature_scratch[4];
   /// The noise profiles carried per frame of the window and per pass (estimateFrame): one list for
   /// the runs on the whole frame, [0], and one per phase of the dilated passes, [1 + phase]; the
   /// checks of the other frames they stand for; and the list the runs on this workspace read and

@@ -35,6 +35,10 @@ struct Grid
   static Grid fromInterleaved(const float* data, int width, int height, std::size_t stride_floats);
   /// Recomputes `valid` from x, y, z and writes NaN into all three coordinates of invalid points.
   void updateValidity();
+
+  /// Becomes a copy of `from` with its validity recomputed as updateValidity does (from's `valid`
+  /// is not read), in one parallel pass. Reuses the grid's storage.
+  void assignValidated(const Grid& from);
 };
 
 /// Unit normals per point of a Grid (NaN where none could be estimated).

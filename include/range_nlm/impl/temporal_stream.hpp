@@ -54,8 +54,7 @@ TemporalStream<PointT>::remember(std::size_t t, bool filtered)
   const HeldFrame& held = window_[t - first_];
   if (filtered) {
     // The output as its cloud reads back: a point with a non-finite coordinate is invalid.
-    start_grid_ = workspace_.result().output;
-    start_grid_.updateValidity();
+    start_grid_.assignValidated(workspace_.result().output);
   }
   const PointCloud& frame = *held.cloud;
   const Viewpoint viewpoint{frame.sensor_origin_[0], frame.sensor_origin_[1], frame.sensor_origin_[2]};

@@ -127,17 +127,27 @@ sameEstimateParameters(const FilterParameters& a, const FilterParameters& b)
 } // namespace
 
 EstimateSignature
-estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float>& scratch)
+estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float> (&scratch)[4], int threads)
 {
   EstimateSignature s;
   s.width = frame.width;
   s.height = frame.height;
   s.viewpoint = viewpoint;
   const int step = latticeStep(frame.width), lag = dilationReferenceLag(frame.width);
-  s.near = secondDifferenceScale(frame, 1, step, scratch);
-  s.half = secondDifferenceScale(frame, std::max(1, lag / 2), step, scratch);
-  s.far = secondDifferenceScale(frame, lag, step, scratch);
-  rangeQuantiles(frame, viewpoint, step, scratch, s);
+  // Four independent parts, each with a scratch of its own, so the result does not depend on the
+  // threads that take them.
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(std::max(1, std::min(threads, 4)))
+  for (int part = 0; part < 4; ++part) {
+    if (part == 0)
+      s.near = secondDifferenceScale(frame, 1, step, scratch[0]);
+    else if (part == 1)
+      s.half = secondDifferenceScale(frame, std::max(1, lag / 2), step, scratch[1]);
+    else if (part == 2)
+      s.far = secondDifferenceScale(frame, lag, step, scratch[2]);
+    else
+      rangeQuantiles(frame, viewpoint, step, scratch[3], s);
+  }
   return s;
 }
 
@@ -190,7 +200,7 @@ takeCarriedEstimates(const Grid& frame, const FilterParameters& parameters, cons
     forgetFrameProfiles(workspace);
     return EstimateSignature();
   }
-  const EstimateSignature signature = estimateSignature(frame, viewpoint, workspace.signature_scratch);
+  const EstimateSignature signature = estimateSignature(frame, viewpoint, workspace.signature_scratch, resolveThreads(parameters.threads));
   CarriedEstimates& carried = workspace.estimates;
   if (carriedEstimatesHold(carried, signature, frame, parameters)) {
     workspace.current_profile = carried.profile;
@@ -230,7 +240,7 @@ checkNeighbourProfiles(const std::vector<const Grid*>& frames, int center, const
       slot = workspace.carried_neighbours.insert(slot, CarriedNeighbour{offset, CarriedEstimates()});
     const Grid& frame = *frames[k];
     const EstimateSignature signature = frame.countValid() > 0
-                                            ? estimateSignature(frame, viewpoint, workspace.signature_scratch)
+                                            ? estimateSignature(frame, viewpoint, workspace.signature_scratch, resolveThreads(parameters.threads))
                                             : EstimateSignature();
     CarriedEstimates& check = slot->check;
     if (signature.width > 0 && carriedEstimatesHold(check, signature, frame, parameters)) {

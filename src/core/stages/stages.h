@@ -50,9 +50,10 @@ carriedProfile(const Workspace& workspace, int offset, int iteration);
 void
 keepProfile(Workspace& workspace, int offset, int iteration, const NoiseProfile& profile);
 
-/// The signature of `frame` (`scratch` holds its samples). (carried_estimates.cpp)
+/// The signature of `frame` (`scratch` holds the samples of its four parts, taken side by side on
+/// up to `threads` threads). (carried_estimates.cpp)
 EstimateSignature
-estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float>& scratch);
+estimateSignature(const Grid& frame, const Viewpoint& viewpoint, std::vector<float> (&scratch)[4], int threads);
 
 /// Whether `carried` still describes `frame` (signature `now`) under `parameters`: made with the
 /// same parameters on a frame of the same size and viewpoint less than tuned::kReuseMaxFrames

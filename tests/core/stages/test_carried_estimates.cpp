@@ -197,12 +197,20 @@ TEST(CarriedEstimates, OneTwoAndThreeThreadsGiveTheSameBits)
 TEST(CarriedEstimates, TheCheckAgreesWithItsOwnFrame)
 {
   const std::vector<Grid> frames = sequence("kinect", 1);
-  std::vector<float> scratch;
+  std::vector<float> scratch[4];
   detail::CarriedEstimates carried;
   carried.valid = true;
   carried.parameters = live();
   carried.frames = 1;
-  carried.signature = detail::estimateSignature(frames[0], kOrigin, scratch);
+  carried.signature = detail::estimateSignature(frames[0], kOrigin, scratch, 2);
+  // Its four parts are taken side by side: one thread gives the same bits.
+  const detail::EstimateSignature one = detail::estimateSignature(frames[0], kOrigin, scratch, 1);
+  EXPECT_EQ(one.near.scale, carried.signature.near.scale);
+  EXPECT_EQ(one.half.log_error, carried.signature.half.log_error);
+  EXPECT_EQ(one.far.scale, carried.signature.far.scale);
+  EXPECT_EQ(one.range_low, carried.signature.range_low);
+  EXPECT_EQ(one.range_high, carried.signature.range_high);
+  EXPECT_EQ(one.range_samples, carried.signature.range_samples);
   EXPECT_GT(carried.signature.near.samples, 1000u);
   EXPECT_GT(carried.signature.near.log_error, 0.0f);
   EXPECT_LT(carried.signature.near.log_error, 0.1f);
@@ -210,7 +218,7 @@ TEST(CarriedEstimates, TheCheckAgreesWithItsOwnFrame)
   EXPECT_TRUE(detail::carriedEstimatesHold(carried, carried.signature, frames[0], live()));
   Grid empty = frames[0];
   std::fill(empty.valid.begin(), empty.valid.end(), 0);
-  const detail::EstimateSignature none = detail::estimateSignature(empty, kOrigin, scratch);
+  const detail::EstimateSignature none = detail::estimateSignature(empty, kOrigin, scratch, 2);
   EXPECT_EQ(none.near.scale, 0.0f);
   EXPECT_FALSE(detail::carriedEstimatesHold(carried, none, empty, live()));
 }
