@@ -114,6 +114,8 @@ rangeNlmVariants(bool include_levers)
   v.emplace_back("  + isolated outliers moved onto their neighbours' surface", p);
   p.patch_edge_gate = 18.0f;
   v.emplace_back("  + gated patches", p);
+  p.similarity_spread = 3.0f;
+  v.emplace_back("  + s from the patch spread (first pass)", p);
   // The last lever row is the default itself, so that it cannot drift from it.
   v.emplace_back("  + automatic displacement, patch guide (= default)", FilterParameters::recommended());
   FilterParameters q = FilterParameters::recommended();
@@ -125,6 +127,9 @@ rangeNlmVariants(bool include_levers)
   q = FilterParameters::recommended();
   q.bandwidth_model = BandwidthModel::global;
   v.emplace_back("default with global (paper) d, s", q);
+  q = FilterParameters::recommended();
+  q.similarity_spread = 0.0f;
+  v.emplace_back("default without s from the patch spread (similarity_spread 0)", q);
   return v;
 }
 

@@ -85,6 +85,10 @@ public:
   /// preset 1).
   void setSimilarityScale(float f) { parameters_.similarity_scale = f; }
   float getSimilarityScale() const { return parameters_.similarity_scale; }
+  /// s^2 from the frame's patch spread, this many times its square, at most the scale's s (0 = off;
+  /// default 3, paper preset 0). See FilterParameters::similarity_spread.
+  void setSimilaritySpread(float f) { parameters_.similarity_spread = f; }
+  float getSimilaritySpread() const { return parameters_.similarity_spread; }
   /// Random valid points sampled for the automatic bandwidths, >= 1 (default 1000).
   void setBandwidthSamples(int n) { parameters_.bandwidth_samples = n; }
   int getBandwidthSamples() const { return parameters_.bandwidth_samples; }

@@ -142,6 +142,17 @@ struct FilterParameters
   float distance_scale = 1.5f;
   /// Factor on sigma_s (or the local noise sigma) for the automatic s. > 0, default 3 (paper: 1).
   float similarity_scale = 3.0f;
+  /// Range-adaptive model with automatic s: s_i^2 = similarity_spread * spread(rho_i)^2, at most
+  /// (similarity_scale * sigma(rho_i))^2, where spread(rho) is the frame's patch spread at that
+  /// range: the median over sampled points of a low quantile of Sim(k, j) to the candidates of
+  /// their search window, projected on the normals the filter uses (estimatePatchSpread in
+  /// src/core/internal.h) -- how far apart the patches of one surface are under this frame's
+  /// noise and normal errors. Only in the first pass over the sensor's own noise (not after a
+  /// pass, nor in dilated or multiscale runs, where neighbouring patches share their noise).
+  /// 0 = off (s = similarity_scale * sigma). >= 0, default 3 (paper: 0): with independent noise
+  /// and exact normals s = 2 sigma, up to today's 3 sigma as the normals' tilt errors grow
+  /// (measured on the ridges and boxes scenes, docs/quality.md "Small features at low noise").
+  float similarity_spread = 3.0f;
   /// Seed of the random sample used to estimate the bandwidths. Same seed, same output.
   std::uint64_t seed = 42;
   /// Largest accepted `bandwidth_samples` (the parameter registry says why).

@@ -61,6 +61,18 @@ interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, c
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                      const Viewpoint& viewpoint, int threads);
+/// The patch spread profile of `grid` (FilterParameters::similarity_spread): at `samples` valid
+/// points with a finite normal (drawn with `seed`), Sim(k, j) of the point's P x P patch
+/// (`patch_size`) to every other candidate j of its S x S search window, projected on its normal
+/// n_k as the filter does; per point the `quantile` of these. The samples are binned by range as
+/// the noise profile is (tuned::kProfileSamplesPerBin, kProfileMaxBins); per bin the median range
+/// into `range` and the square root of the median of the points' quantiles into `spread`: how far
+/// apart (RMS height) the patches of one surface are under this frame's noise and normals. Both
+/// empty if no sample has a candidate. The same result for any `threads`.
+void
+estimatePatchSpread(const Grid& grid, const NormalField& normals, int search_window, int patch_size, int samples,
+                    std::uint64_t seed, const Viewpoint& viewpoint, int threads, float quantile,
+                    std::vector<float>& range, std::vector<float>& spread);
 /// The range |p - viewpoint| of every point of `grid` into `rho` (0 for invalid points), by
 /// `threads` threads.
 void

@@ -235,4 +235,114 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
   return profile;
 }
 
+void
+detail::estimatePatchSpread(const Grid& grid, const NormalField& normals, int search_window, int patch_size,
+                            int samples, std::uint64_t seed, const Viewpoint& viewpoint, int threads, float quantile,
+                            std::vector<float>& range, std::vector<float>& spread)
+{
+  range.clear();
+  spread.clear();
+  const std::size_t n = grid.size();
+  const auto candidate = [&](std::size_t i) {
+    return grid.valid[i] != 0 && std::isfinite(normals.nx[i]) && std::isfinite(normals.ny[i]) &&
+           std::isfinite(normals.nz[i]);
+  };
+  // The samples are the candidates of ranks rng() % candidates, found by a prefix count per row.
+  std::vector<std::uint64_t> before(static_cast<std::size_t>(grid.height) + 1, 0u);
+  for (int v = 0; v < grid.height; ++v) {
+    std::uint64_t count = 0;
+    for (int u = 0; u < grid.width; ++u)
+      count += candidate(static_cast<std::size_t>(v) * grid.width + u) ? 1u : 0u;
+    before[v + 1] = before[v] + count;
+  }
+  const std::uint64_t candidates = before.back();
+  if (candidates == 0 || samples <= 0 || n == 0)
+    return;
+  std::mt19937_64 rng(seed);
+  std::vector<int> picked(static_cast<std::size_t>(samples));
+  for (int& k : picked) {
+    const std::uint64_t rank = rng() % candidates;
+    const int v = static_cast<int>(std::upper_bound(before.begin(), before.end(), rank) - before.begin()) - 1;
+    std::uint64_t left = rank - before[v];
+    int u = 0;
+    for (;; ++u)
+      if (candidate(static_cast<std::size_t>(v) * grid.width + u) && left-- == 0)
+        break;
+    k = v * grid.width + u;
+  }
+  const int r = std::max(0, search_window / 2), pr = std::max(0, patch_size / 2);
+  const double q = std::clamp(static_cast<double>(quantile), 0.0, 1.0);
+  struct Sample
+  {
+    float rho, sim;
+  };
+  std::vector<Sample> slots(picked.size());
+  std::vector<unsigned char> kept(picked.size(), 0);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
+  for (int s = 0; s < samples; ++s) {
+    const int k = picked[s];
+    const int u = k % grid.width, v = k / grid.width;
+    const double nx = normals.nx[k], ny = normals.ny[k], nz = normals.nz[k];
+    std::vector<float> sims;
+    sims.reserve(static_cast<std::size_t>((2 * r + 1) * (2 * r + 1)));
+    for (int jv = std::max(0, v - r); jv <= std::min(grid.height - 1, v + r); ++jv)
+      for (int ju = std::max(0, u - r); ju <= std::min(grid.width - 1, u + r); ++ju) {
+        const int j = jv * grid.width + ju;
+        if (j == k || !grid.valid[j])
+          continue;
+        double sum = 0.0;
+        int pairs = 0;
+        for (int ov = -pr; ov <= pr; ++ov)
+          for (int ou = -pr; ou <= pr; ++ou) {
+            const int av = v + ov, au = u + ou, bv = jv + ov, bu = ju + ou;
+            if (av < 0 || av >= grid.height || au < 0 || au >= grid.width || bv < 0 || bv >= grid.height ||
+                bu < 0 || bu >= grid.width)
+              continue;
+            const int a = av * grid.width + au, b = bv * grid.width + bu;
+            if (!grid.valid[a] || !grid.valid[b])
+              continue;
+            const double h = (double(grid.x[a]) - grid.x[b]) * nx + (double(grid.y[a]) - grid.y[b]) * ny +
+                             (double(grid.z[a]) - grid.z[b]) * nz;
+            sum += h * h;
+            ++pairs;
+          }
+        if (pairs > 0)
+          sims.push_back(static_cast<float>(sum / pairs));
+      }
+    if (sims.empty())
+      continue;
+    const std::size_t at = std::min(sims.size() - 1, static_cast<std::size_t>(q * double(sims.size() - 1) + 0.5));
+    std::nth_element(sims.begin(), sims.begin() + static_cast<std::ptrdiff_t>(at), sims.end());
+    const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
+    const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(rho > 0.0))
+      continue;
+    slots[s] = Sample{float(rho), sims[at]};
+    kept[s] = 1;
+  }
+  std::vector<Sample> found;
+  found.reserve(picked.size());
+  for (std::size_t s = 0; s < picked.size(); ++s)
+    if (kept[s])
+      found.push_back(slots[s]);
+  if (found.empty())
+    return;
+  std::stable_sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
+  const std::size_t bins =
+      std::clamp<std::size_t>(found.size() / tuned::kProfileSamplesPerBin, 1, tuned::kProfileMaxBins);
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t lo = b * found.size() / bins, hi = (b + 1) * found.size() / bins;
+    std::vector<float> rho, sim;
+    for (std::size_t i = lo; i < hi; ++i) {
+      rho.push_back(found[i].rho);
+      sim.push_back(found[i].sim);
+    }
+    range.push_back(medianOf(rho));
+    spread.push_back(std::sqrt(std::max(0.0f, medianOf(sim))));
+  }
+  for (std::size_t b = 1; b < range.size(); ++b)
+    range[b] = std::max(range[b], std::nextafter(range[b - 1], 1e30f));
+}
+
 } // namespace range_nlm

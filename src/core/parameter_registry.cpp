@@ -217,6 +217,12 @@ windowAndBandwidthEntries()
       .range(between(1e-3, 1e3, "must be finite and > 0, from 0.001 to 1000"), kScaleFactor)
       .help("factor on sigma_s (or the local noise sigma) for the automatic s")
       .cli("similarity-scale").ros("similarity_scale").pass("similarity_scale"),
+    Entry("similarity_spread", &P::similarity_spread).zeroMeans("off")
+      .range(between(0, 1e3, "must be finite and >= 0 (0 = off), at most 1000"), kScaleFactor)
+      .help("range-adaptive automatic s: s^2 = this times the frame's patch spread at the point's range (the "
+            "median over sampled points of a low quantile of Sim to their candidates), at most (similarity_scale "
+            "sigma)^2; 0 = off")
+      .cli("similarity-spread").ros("similarity_spread").pass("similarity_spread"),
     Entry("seed", &P::seed)
       .range(between(0, 18446744073709551615.0, "must be an integer from 0 to 2^64 - 1"),
              "every 64-bit value seeds the sample; the bounds are the field's type (a negative value is refused "

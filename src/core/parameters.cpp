@@ -52,6 +52,7 @@ FilterParameters::paper()
   p.iterations = 1;
   p.distance_scale = 0.75f;
   p.similarity_scale = 1.0f;
+  p.similarity_spread = 0.0f;
   p.normal_window = 3;
   p.normal_presmooth_window = 0;
   p.normal_edge_gate = 0.0f;

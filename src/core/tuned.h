@@ -86,7 +86,8 @@
   X(kReuseCheckGroups, int, 16, "derived", "carried estimates: a scale's error from the spread of 16 sample groups") \
   X(kReuseTestSigmas, double, 4.0, "derived", "carried estimates: a change beyond 4 standard errors is a change")   \
   X(kReuseRangeTail, double, 0.05, "derived", "carried estimates: the ranges' 5 % and 95 % quantiles")             \
-  X(kReuseMaxFrames, int, 30, "derived", "carried estimates: made afresh at least once a second at 30 Hz")
+  X(kReuseMaxFrames, int, 30, "derived", "carried estimates: made afresh at least once a second at 30 Hz")     \
+  X(kSpreadQuantile, float, 0.25f, "generated", "patch spread: a sample's lower quartile of Sim to its candidates")
 
 #define RANGE_NLM_TUNED_NUMBERS(X)                                                                                    \
   RANGE_NLM_TUNED_PIPELINE(X)                                                                                         \

@@ -32,6 +32,14 @@ struct Workspace
   std::vector<float> along;
   std::vector<unsigned char> changed;
   std::vector<std::vector<float>> inverse_d2, inverse_s2;
+  /// FilterParameters::similarity_spread: the current frame's patch spread profile (ranges,
+  /// spreads) and per point the factor on a frame's sigma that gives s (else empty).
+  std::vector<float> spread_range, spread_value, similarity_factor;
+  /// Whether the current frame of this workspace's runs carries noise that is not the sensor's,
+  /// independent from pixel to pixel (no patch spread then, FilterParameters::similarity_spread):
+  /// a phase of dilated passes (chosen for correlated or strong noise), the contiguous last pass
+  /// after them, and a multiscale run's finest scale (the coarser scales' corrections carried in).
+  bool correlated_input = false;
   /// Guarded: the patch guide (FrameTerm::patches), its per-pixel weights, and a neighbour's
   /// changed pixels widened by the guide's margin.
   Grid guide;

@@ -170,6 +170,9 @@ TEST(Dilation, EachPhaseIsFilteredAsAFrameOfItsOwn)
 
   FilterParameters contiguous = p;
   contiguous.dilation = 1;
+  // A phase of dilated passes keeps s = similarity_scale * sigma (no patch spread there:
+  // Workspace::correlated_input); a frame filtered on its own would take s from its patch spread.
+  contiguous.similarity_spread = 0.0f;
   Grid expected = frame;
   for (int v0 = 0; v0 < 2; ++v0)
     for (int u0 = 0; u0 < 2; ++u0) {

@@ -76,3 +76,103 @@ TEST(NoiseProfile, EstimatesDoNotDependOnTheThreadCount)
     EXPECT_EQ(detail::automaticDilation(frame, threads), automaticDilation(frame));
   }
 }
+
+namespace
+{
+/// A fronto-parallel plane at z = 1 m (160 x 120, f = 131.25 px), every point moved along z by
+/// independent noise of `sigma` metres, and normals tilted by `tilt` radians about the y axis.
+struct PlaneWithNormals
+{
+  Grid grid;
+  NormalField normals;
+};
+
+PlaneWithNormals
+noisyPlane(float sigma, float tilt, std::uint64_t seed = 3)
+{
+  PlaneWithNormals out;
+  Grid& g = out.grid;
+  g.width = 160;
+  g.height = 120;
+  const std::size_t n = static_cast<std::size_t>(g.width) * g.height;
+  g.x.resize(n), g.y.resize(n), g.z.resize(n);
+  g.valid.assign(n, 1);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const float f = 131.25f;
+  for (int v = 0; v < g.height; ++v)
+    for (int u = 0; u < g.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * g.width + u;
+      g.z[i] = 1.0f + sigma * noise(rng);
+      g.x[i] = (u - 0.5f * (g.width - 1)) / f;
+      g.y[i] = (v - 0.5f * (g.height - 1)) / f;
+    }
+  out.normals.nx.assign(n, std::sin(tilt));
+  out.normals.ny.assign(n, 0.0f);
+  out.normals.nz.assign(n, -std::cos(tilt));
+  return out;
+}
+
+std::vector<float>
+spreadOf(const PlaneWithNormals& p, int threads = 1, float quantile = 0.25f)
+{
+  std::vector<float> range, spread;
+  detail::estimatePatchSpread(p.grid, p.normals, 9, 3, 1000, 7, kOrigin, threads, quantile, range, spread);
+  return spread;
+}
+} // namespace
+
+// The patch spread (FilterParameters::similarity_spread) is how far apart the patches of one
+// surface are: 0 on a noise-free plane with exact normals; with independent noise of sigma and
+// exact normals Sim of a 3 x 3 patch pair is 2 sigma^2 times a chi-square of 9 degrees of freedom
+// over 9, whose lower quartile is 0.66 (spread 1.15 sigma); normals tilted against the plane add
+// the height the tilt gives the candidates' offsets, so the spread grows with the tilt; a higher
+// quantile gives a larger spread.
+TEST(PatchSpread, IsTheDistanceOfPatchesOfOneSurface)
+{
+  const std::vector<float> clean = spreadOf(noisyPlane(0.0f, 0.0f));
+  ASSERT_FALSE(clean.empty());
+  for (float s : clean)
+    EXPECT_LT(s, 1e-6f);
+  const float sigma = 0.001f;
+  const std::vector<float> noisy = spreadOf(noisyPlane(sigma, 0.0f));
+  ASSERT_FALSE(noisy.empty());
+  for (float s : noisy) {
+    EXPECT_GT(s, 1.0f * sigma);
+    EXPECT_LT(s, 1.3f * sigma);
+  }
+  const std::vector<float> tilted = spreadOf(noisyPlane(sigma, 0.2f));
+  ASSERT_EQ(tilted.size(), noisy.size());
+  for (std::size_t b = 0; b < noisy.size(); ++b)
+    EXPECT_GT(tilted[b], 1.5f * noisy[b]) << b;
+  const std::vector<float> median = spreadOf(noisyPlane(sigma, 0.0f), 1, 0.5f);
+  ASSERT_EQ(median.size(), noisy.size());
+  for (std::size_t b = 0; b < noisy.size(); ++b)
+    EXPECT_GT(median[b], noisy[b]) << b;
+}
+
+// The patch spread's samples are evaluated by several threads: the same result as one thread, to
+// the bit; a frame without valid points gives an empty profile.
+TEST(PatchSpread, DoesNotDependOnTheThreadCount)
+{
+  SceneOptions o = planeScene("stereo", 160, 120);
+  o.scene = SceneType::boxes;
+  o.dropout = 0.05;
+  const Grid frame = gridOf(renderSequence(o).front().noisy);
+  const NormalField normals = detail::estimateNormalsGated(frame, 7, kOrigin, 1, {}, 0);
+  std::vector<float> range1, spread1;
+  detail::estimatePatchSpread(frame, normals, 9, 3, 1000, 5, kOrigin, 1, 0.25f, range1, spread1);
+  ASSERT_FALSE(range1.empty());
+  for (int threads : {2, 3}) {
+    std::vector<float> range, spread;
+    detail::estimatePatchSpread(frame, normals, 9, 3, 1000, 5, kOrigin, threads, 0.25f, range, spread);
+    EXPECT_EQ(range, range1) << threads;
+    EXPECT_EQ(spread, spread1) << threads;
+  }
+  Grid empty = frame;
+  std::fill(empty.valid.begin(), empty.valid.end(), 0);
+  std::vector<float> range{1.0f}, spread{1.0f};
+  detail::estimatePatchSpread(empty, normals, 9, 3, 1000, 5, kOrigin, 1, 0.25f, range, spread);
+  EXPECT_TRUE(range.empty());
+  EXPECT_TRUE(spread.empty());
+}

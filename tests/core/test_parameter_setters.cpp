@@ -45,6 +45,7 @@ accessors()
       RANGE_NLM_ACCESSORS(similarity_bandwidth, SimilarityBandwidth),
       RANGE_NLM_ACCESSORS(distance_scale, DistanceScale),
       RANGE_NLM_ACCESSORS(similarity_scale, SimilarityScale),
+      RANGE_NLM_ACCESSORS(similarity_spread, SimilaritySpread),
       RANGE_NLM_ACCESSORS(seed, Seed),
       RANGE_NLM_ACCESSORS(bandwidth_samples, BandwidthSamples),
       RANGE_NLM_ACCESSORS(normal_window, NormalWindowSize),

@@ -111,7 +111,10 @@ finishDilatedPasses(const std::vector<const Grid*>& frames, int center, const Fi
   fine.iterations = 1;
   std::vector<const Grid*> last = frames;
   last[center] = &workspace.merged;
+  const bool correlated = workspace.correlated_input;
+  workspace.correlated_input = true;
   runContiguous(last, center, fine, viewpoint, active, workspace);
+  workspace.correlated_input = correlated;
 }
 
 } // namespace
@@ -247,6 +250,7 @@ filterPhase(const PhaseRun& run, int u0, int v0, const PhaseBuffers& buffers, in
   if (split)
     split->stop();
   try {
+    phase.correlated_input = true;
     runContiguous(sub_frames, run.center, run.coarse, run.viewpoint, *buffers.active, phase);
   } catch (const UnfilterableFrame&) {
     if (split)

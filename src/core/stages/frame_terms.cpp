@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace range_nlm
 {
@@ -105,9 +106,56 @@ inverseSimilarityMap(FrameContext& ctx, int k, const std::vector<float>& sig, fl
   const float* __restrict g = sig.data();
   const float ss = ctx.parameters.similarity_scale * ratio;
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(ctx.n);
+  const std::vector<float>& factor = ctx.workspace.similarity_factor;
+  if (factor.size() == ctx.n) {
+    // similarity_spread: the factor from the patch spread at the point's range.
+    const float* __restrict f = factor.data();
+#pragma omp parallel for simd schedule(static) num_threads(ctx.threads)
+    for (std::ptrdiff_t i = 0; i < size; ++i)
+      out[i] = inverseSquareInline(ratio * f[i] * g[i]);
+    return;
+  }
 #pragma omp parallel for simd schedule(static) num_threads(ctx.threads)
   for (std::ptrdiff_t i = 0; i < size; ++i)
     out[i] = inverseSquareInline(ss * g[i]);
+}
+
+/// FilterParameters::similarity_spread: per point the factor on a frame's sigma that gives s,
+/// min(similarity_scale, sqrt(similarity_spread) * spread(rho_i) / sigma(rho_i)), from the current
+/// frame's patch spread profile (its points and the normals of this pass) into
+/// workspace.similarity_factor. Only in the first pass over the sensor's own noise, independent
+/// from pixel to pixel: after a pass, and where the dilated passes or the multiscale run took
+/// over (correlated or strong noise; Workspace::correlated_input), neighbouring patches share
+/// their noise, and the lower quartile of Sim to the candidates understates how far apart the
+/// patches of one surface are. Elsewhere empty: s = similarity_scale * sigma.
+void
+similarityFactorMap(FrameContext& ctx)
+{
+  Workspace& workspace = ctx.workspace;
+  std::vector<float>& factor = workspace.similarity_factor;
+  factor.clear();
+  const FilterParameters& p = ctx.parameters;
+  if (!(p.similarity_spread > 0.0f) || !ctx.adaptive || !ctx.own_s || ctx.iteration > 0 ||
+      workspace.correlated_input)
+    return;
+  estimatePatchSpread(ctx.current(), workspace.normals, p.search_window, p.patch_size, p.bandwidth_samples,
+                      p.seed + 104729u, ctx.viewpoint, ctx.threads, tuned::kSpreadQuantile, workspace.spread_range,
+                      workspace.spread_value);
+  if (workspace.spread_range.empty())
+    return;
+  std::vector<float>& spread = workspace.other_sigma; // scratch: the frames' terms fill it afterwards
+  profileMap(ctx, workspace.spread_range, workspace.spread_value, workspace.ranges, spread);
+  factor.resize(ctx.n);
+  const float* __restrict e = spread.data();
+  const float* __restrict g = workspace.profile_sigma.data();
+  float* __restrict out = factor.data();
+  const float scale = p.similarity_scale, root = std::sqrt(p.similarity_spread);
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(ctx.n);
+#pragma omp parallel for simd schedule(static) num_threads(ctx.threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    const float wanted = root * e[i];
+    out[i] = g[i] > 0.0f && wanted < scale * g[i] ? wanted / g[i] : scale;
+  }
 }
 
 /// Per-point bandwidths of frame k from its profile at the centre point's range; a bandwidth
@@ -166,6 +214,7 @@ detail::buildFrameTerms(FrameContext& ctx)
     neighbours += ctx.usable[k] && k != ctx.center ? 1 : 0;
   // Built only where it can be used (kGuideMinFrames): radius 1 does no work for it.
   ctx.may_guide = ctx.parameters.patch_guide && neighbours >= tuned::kGuideMinFrames;
+  similarityFactorMap(ctx);
   ctx.guide_frames = 0;
   for (int k = 0; k < ctx.count; ++k) {
     if (!ctx.usable[k])

@@ -332,7 +332,10 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
   // corrections (and its temporal neighbours as they are).
   std::vector<const Grid*> carried = frames;
   carried[center] = &workspace.carried;
+  const bool correlated = workspace.correlated_input;
+  workspace.correlated_input = true;
   runOneScale(carried, center, fine, viewpoint, active, workspace);
+  workspace.correlated_input = correlated;
 }
 
 } // namespace detail
