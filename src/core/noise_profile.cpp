@@ -87,6 +87,76 @@ interpolateProfiles(const std::vector<float>& xs, const std::vector<float>& ys, 
       finish(zs, zl, zh, out2 + i0);
   }
 }
+
+/// `samples` pixels of an n-pixel frame drawn with replacement from those for which eligible(i)
+/// holds, in the order drawn: the eligible pixels of ranks rng() % eligible count (rng seeded
+/// with `seed`), a rank found by a prefix count per chunk of 64 pixels. `count` receives the
+/// number of eligible pixels; none is drawn when it is 0.
+template <typename Eligible>
+std::vector<int>
+drawSamples(std::size_t n, const Eligible& eligible, int samples, std::uint64_t seed, std::uint64_t& count)
+{
+  constexpr std::size_t kChunk = 64;
+  const std::size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<std::uint64_t> before(chunks + 1, 0u); // eligible pixels before each chunk
+  for (std::size_t c = 0; c < chunks; ++c) {
+    const std::size_t end = std::min(n, (c + 1) * kChunk);
+    std::uint64_t in_chunk = 0;
+    for (std::size_t i = c * kChunk; i < end; ++i)
+      in_chunk += eligible(i) ? 1u : 0u;
+    before[c + 1] = before[c] + in_chunk;
+  }
+  count = before[chunks];
+  std::vector<int> picked;
+  if (count == 0 || samples <= 0)
+    return picked;
+  std::mt19937_64 rng(seed);
+  picked.resize(static_cast<std::size_t>(samples));
+  for (int& k : picked) {
+    const std::uint64_t rank = rng() % count;
+    const std::size_t c =
+        static_cast<std::size_t>(std::upper_bound(before.begin(), before.end(), rank) - before.begin()) - 1;
+    std::uint64_t left = rank - before[c];
+    std::size_t i = c * kChunk;
+    for (;; ++i)
+      if (eligible(i) && left-- == 0)
+        break;
+    k = static_cast<int>(i);
+  }
+  return picked;
+}
+
+/// The bins of a profile over `count` samples sorted by range: equal counts, tuned::kProfileSamplesPerBin
+/// each, 1 to tuned::kProfileMaxBins; per_bin(lo, hi) for each bin's samples [lo, hi), in range order.
+template <typename PerBin>
+void
+forEachProfileBin(std::size_t count, const PerBin& per_bin)
+{
+  const std::size_t bins = std::clamp<std::size_t>(count / tuned::kProfileSamplesPerBin, 1, tuned::kProfileMaxBins);
+  for (std::size_t b = 0; b < bins; ++b)
+    per_bin(b * count / bins, (b + 1) * count / bins);
+}
+
+/// The median of one field of samples [lo, hi).
+template <typename Sample>
+float
+medianOfField(const std::vector<Sample>& samples, std::size_t lo, std::size_t hi, float Sample::*field)
+{
+  std::vector<float> values;
+  values.reserve(hi - lo);
+  for (std::size_t i = lo; i < hi; ++i)
+    values.push_back(samples[i].*field);
+  return detail::medianOf(values);
+}
+
+/// The bins' ranges made strictly increasing: equal ranges (e.g. a fronto-parallel plane) would
+/// make interpolation degenerate.
+void
+strictlyIncreasing(std::vector<float>& range)
+{
+  for (std::size_t b = 1; b < range.size(); ++b)
+    range[b] = std::max(range[b], std::nextafter(range[b - 1], 1e30f));
+}
 } // namespace
 
 void
@@ -129,32 +199,12 @@ NoiseProfile
 detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,
                              const Viewpoint& viewpoint, int threads)
 {
-  // The samples are the valid points of ranks rng() % valid, in index order. Valid points are
-  // counted per chunk of 64 pixels (a vectorized sum), and each rank is found in its chunk.
-  constexpr std::size_t kChunk = 64;
-  const std::size_t n = grid.size(), chunks = (n + kChunk - 1) / kChunk;
-  std::vector<std::uint32_t> before(chunks + 1, 0u); // valid points before each chunk
-  for (std::size_t c = 0; c < chunks; ++c) {
-    const unsigned char* __restrict v = grid.valid.data() + c * kChunk;
-    const std::size_t m = std::min(kChunk, n - c * kChunk);
-    std::uint32_t count = 0;
-    for (std::size_t i = 0; i < m; ++i)
-      count += v[i] != 0;
-    before[c + 1] = before[c] + count;
-  }
-  const std::uint64_t valid_count = before[chunks];
+  // The samples: valid points drawn at random (drawSamples).
+  std::uint64_t valid_count = 0;
+  const std::vector<int> picked =
+      drawSamples(grid.size(), [&](std::size_t i) { return grid.valid[i] != 0; }, samples, seed, valid_count);
   if (valid_count == 0)
     throw UnfilterableFrame("range_nlm: the cloud has no valid point; nothing to estimate the noise from");
-  const auto validOfRank = [&](std::uint64_t rank) {
-    const std::size_t c =
-        static_cast<std::size_t>(std::upper_bound(before.begin(), before.end(), rank) - before.begin()) - 1;
-    std::uint64_t left = rank - before[c];
-    std::size_t i = c * kChunk;
-    for (;; ++i)
-      if (grid.valid[i] && left-- == 0)
-        return static_cast<int>(i);
-  };
-  std::mt19937_64 rng(seed);
   // At least the 3 x 3 neighbourhood: a plane fit needs 4 points, and a 1 x 1 search window (which
   // moves nothing) must not make the noise estimate impossible.
   const int r = std::max(1, search_window / 2);
@@ -162,11 +212,8 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
   {
     float rho, sigma, extent;
   };
-  // The samples are drawn in order, then evaluated in parallel, each into its own slot; the
-  // slots of windows that qualify are kept in sample order.
-  std::vector<int> picked(static_cast<std::size_t>(std::max(samples, 0)));
-  for (int& k : picked)
-    k = validOfRank(rng() % valid_count);
+  // The samples are evaluated in parallel, each into its own slot; the slots of windows that
+  // qualify are kept in sample order.
   std::vector<Sample> slots(picked.size());
   std::vector<unsigned char> kept(picked.size(), 0);
   (void)threads;
@@ -214,24 +261,13 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
   if (found.empty())
     throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
   std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
-  const std::size_t bins =
-      std::clamp<std::size_t>(found.size() / tuned::kProfileSamplesPerBin, 1, tuned::kProfileMaxBins);
   NoiseProfile profile;
-  for (std::size_t b = 0; b < bins; ++b) {
-    const std::size_t lo = b * found.size() / bins, hi = (b + 1) * found.size() / bins;
-    std::vector<float> rho, sigma, extent;
-    for (std::size_t i = lo; i < hi; ++i) {
-      rho.push_back(found[i].rho);
-      sigma.push_back(found[i].sigma);
-      extent.push_back(found[i].extent);
-    }
-    profile.range.push_back(medianOf(rho));
-    profile.sigma.push_back(medianOf(sigma));
-    profile.extent.push_back(medianOf(extent));
-  }
-  // Equal ranges (e.g. a fronto-parallel plane) would make interpolation degenerate.
-  for (std::size_t b = 1; b < profile.range.size(); ++b)
-    profile.range[b] = std::max(profile.range[b], std::nextafter(profile.range[b - 1], 1e30f));
+  forEachProfileBin(found.size(), [&](std::size_t lo, std::size_t hi) {
+    profile.range.push_back(medianOfField(found, lo, hi, &Sample::rho));
+    profile.sigma.push_back(medianOfField(found, lo, hi, &Sample::sigma));
+    profile.extent.push_back(medianOfField(found, lo, hi, &Sample::extent));
+  });
+  strictlyIncreasing(profile.range);
   return profile;
 }
 
@@ -247,29 +283,11 @@ detail::estimatePatchSpread(const Grid& grid, const NormalField& normals, int se
     return grid.valid[i] != 0 && std::isfinite(normals.nx[i]) && std::isfinite(normals.ny[i]) &&
            std::isfinite(normals.nz[i]);
   };
-  // The samples are the candidates of ranks rng() % candidates, found by a prefix count per row.
-  std::vector<std::uint64_t> before(static_cast<std::size_t>(grid.height) + 1, 0u);
-  for (int v = 0; v < grid.height; ++v) {
-    std::uint64_t count = 0;
-    for (int u = 0; u < grid.width; ++u)
-      count += candidate(static_cast<std::size_t>(v) * grid.width + u) ? 1u : 0u;
-    before[v + 1] = before[v] + count;
-  }
-  const std::uint64_t candidates = before.back();
-  if (candidates == 0 || samples <= 0 || n == 0)
+  // The samples: points with a finite normal drawn at random (drawSamples).
+  std::uint64_t candidates = 0;
+  const std::vector<int> picked = drawSamples(n, candidate, samples, seed, candidates);
+  if (picked.empty())
     return;
-  std::mt19937_64 rng(seed);
-  std::vector<int> picked(static_cast<std::size_t>(samples));
-  for (int& k : picked) {
-    const std::uint64_t rank = rng() % candidates;
-    const int v = static_cast<int>(std::upper_bound(before.begin(), before.end(), rank) - before.begin()) - 1;
-    std::uint64_t left = rank - before[v];
-    int u = 0;
-    for (;; ++u)
-      if (candidate(static_cast<std::size_t>(v) * grid.width + u) && left-- == 0)
-        break;
-    k = v * grid.width + u;
-  }
   const int r = std::max(0, search_window / 2), pr = std::max(0, patch_size / 2);
   const double q = std::clamp(static_cast<double>(quantile), 0.0, 1.0);
   struct Sample
@@ -329,20 +347,11 @@ detail::estimatePatchSpread(const Grid& grid, const NormalField& normals, int se
   if (found.empty())
     return;
   std::stable_sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
-  const std::size_t bins =
-      std::clamp<std::size_t>(found.size() / tuned::kProfileSamplesPerBin, 1, tuned::kProfileMaxBins);
-  for (std::size_t b = 0; b < bins; ++b) {
-    const std::size_t lo = b * found.size() / bins, hi = (b + 1) * found.size() / bins;
-    std::vector<float> rho, sim;
-    for (std::size_t i = lo; i < hi; ++i) {
-      rho.push_back(found[i].rho);
-      sim.push_back(found[i].sim);
-    }
-    range.push_back(medianOf(rho));
-    spread.push_back(std::sqrt(std::max(0.0f, medianOf(sim))));
-  }
-  for (std::size_t b = 1; b < range.size(); ++b)
-    range[b] = std::max(range[b], std::nextafter(range[b - 1], 1e30f));
+  forEachProfileBin(found.size(), [&](std::size_t lo, std::size_t hi) {
+    range.push_back(medianOfField(found, lo, hi, &Sample::rho));
+    spread.push_back(std::sqrt(std::max(0.0f, medianOfField(found, lo, hi, &Sample::sim))));
+  });
+  strictlyIncreasing(range);
 }
 
 } // namespace range_nlm

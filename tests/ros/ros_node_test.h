@@ -97,12 +97,14 @@ private:
   std::deque<typename Message::ConstPtr> messages_;
 };
 
-/// Waits until `done` holds (true) or 20 s pass (false).
+/// Waits until `done` holds (true) or 60 s pass (false). Generous: on a loaded machine a nodelet
+/// manager has taken more than 20 s to load the plugin and connect; no caller waits for something
+/// that must not happen, so a passing test never waits this long.
 template <typename Condition>
 bool
 waitFor(const Condition& done)
 {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (!done()) {
     if (std::chrono::steady_clock::now() > deadline)
       return false;
