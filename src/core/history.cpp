@@ -74,7 +74,9 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
     return;
   }
   const std::size_t n = frame.size();
-  std::vector<float> rho_f, rho_h;
+  RunningAverage::Buffers& buffers = history.buffers;
+  std::vector<float>& rho_f = buffers.rho_frame;
+  std::vector<float>& rho_h = buffers.rho_history;
   detail::rangesOf(frame, viewpoint, threads, rho_f);
   detail::rangesOf(history.average, viewpoint, threads, rho_h);
   NoiseProfile estimated;
@@ -88,12 +90,19 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
     }
   }
   const NoiseProfile& profile = known && !known->empty() ? *known : estimated;
-  std::vector<float> sigma(n);
-  detail::interpolateProfile(profile.range, profile.sigma, rho_f.data(), sigma.data(), n);
+  // (Every element of the maps below is written before it is read: resized, not cleared.)
+  std::vector<float>& sigma = buffers.sigma;
+  sigma.resize(n);
+  detail::interpolateProfile(profile.range, profile.sigma, rho_f.data(), sigma.data(), n, threads);
   // Differences to the history levelled to the frame (NaN where either has no point), and the
   // noise sigma of each: the frame's, with the history's share 1 / count of it.
   const bool offset = change.change == FrameChange::offset && change.range_offset.size() == n;
-  std::vector<float> along(n), noise(n), ratios(n);
+  std::vector<float>& along = buffers.along;
+  std::vector<float>& noise = buffers.noise;
+  std::vector<float>& ratios = buffers.ratios;
+  along.resize(n);
+  noise.resize(n);
+  ratios.resize(n);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -110,7 +119,7 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   // The history starts over at fewer frame-to-frame sigmas than the filter's own test of change
   // (detail::kChangeSigmas): a history that starts over needlessly starts from the filtered frame,
   // which costs little, but one that averages a surface that moved keeps it where it was.
-  std::vector<unsigned char> changed;
+  std::vector<unsigned char>& changed = buffers.changed;
   detail::markChangedPixels(along, frame.width, frame.height, noise.data(), tuned::kHistoryChangeSigmas * ratio,
                             threads, changed);
   Grid& h = history.average;

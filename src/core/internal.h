@@ -57,6 +57,11 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
 void
 interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                    std::size_t n, const std::vector<float>* ys2 = nullptr, float* out2 = nullptr);
+/// interpolateProfile by `threads` threads, in blocks of points (the same result: each point's
+/// value depends on that point alone).
+void
+interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                   std::size_t n, int threads, const std::vector<float>* ys2 = nullptr, float* out2 = nullptr);
 /// estimateNoiseProfile by `threads` threads (0 = OpenMP's default), with the same result.
 NoiseProfile
 estimateNoiseProfile(const Grid& grid, int search_window, int samples, std::uint64_t seed,

@@ -176,6 +176,18 @@ detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float
     interpolateProfiles<false>(xs, ys, x, out, n, nullptr, nullptr);
 }
 
+void
+detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                           std::size_t n, int threads, const std::vector<float>* ys2, float* out2)
+{
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n), block = 4096;
+  (void)threads;
+#pragma omp parallel for schedule(static) num_threads(detail::resolveThreads(threads))
+  for (std::ptrdiff_t lo = 0; lo < size; lo += block)
+    interpolateProfile(xs, ys, x + lo, out + lo, static_cast<std::size_t>(std::min(block, size - lo)), ys2,
+                       out2 ? out2 + lo : nullptr);
+}
+
 float
 NoiseProfile::sigmaAt(float rho) const
 {

@@ -53,11 +53,20 @@ detail::medianOfNonNegative(const float* values, const unsigned char* mask, std:
   std::size_t below = 0, chosen = 0;
   for (; below + histogram[chosen] <= rank; ++chosen)
     below += histogram[chosen];
+  // The bin's values, gathered by the threads side by side; the value of rank k among them does
+  // not depend on the order they are gathered in.
   std::vector<float> in_bin;
   in_bin.reserve(histogram[chosen]);
-  for (std::ptrdiff_t i = 0; i < size; ++i)
-    if (counted(i) && bin(values[i]) == chosen)
-      in_bin.push_back(values[i]);
+#pragma omp parallel num_threads(detail::resolveThreads(threads))
+  {
+    std::vector<float> mine;
+#pragma omp for schedule(static) nowait
+    for (std::ptrdiff_t i = 0; i < size; ++i)
+      if (counted(i) && bin(values[i]) == chosen)
+        mine.push_back(values[i]);
+#pragma omp critical(range_nlm_median_bin)
+    in_bin.insert(in_bin.end(), mine.begin(), mine.end());
+  }
   const std::ptrdiff_t k = static_cast<std::ptrdiff_t>(rank - below);
   std::nth_element(in_bin.begin(), in_bin.begin() + k, in_bin.end());
   return in_bin[k];

@@ -182,3 +182,30 @@ TEST(RunningAverage, HolesEmptyAPixelsHistoryAndTheThreadCountChangesNothing)
   Grid wrong(4, 4);
   EXPECT_THROW(updateRunningAverage(one, small, &wrong, kOrigin, kLength, 9, 1000, 42, 1), std::invalid_argument);
 }
+
+// The history keeps its maps' storage from call to call (RunningAverage::buffers): a history whose
+// buffers were sized by frames of another size averages the next frames as a fresh one does.
+TEST(RunningAverage, BuffersKeptFromFramesOfAnotherSizeChangeNothing)
+{
+  const std::vector<Grid> frames = noisyPlanes(4);
+  Grid big(200, 150);
+  for (std::size_t i = 0; i < big.size(); ++i) {
+    big.x[i] = 0.004f * (static_cast<int>(i % 200) - 100), big.y[i] = 0.004f * (static_cast<int>(i / 200) - 75);
+    big.z[i] = 2.0f + 0.001f * static_cast<float>(i % 7);
+    big.valid[i] = 1;
+  }
+  RunningAverage reused, fresh;
+  add(reused, big);
+  add(reused, big, nullptr, 2); // the buffers now hold 200 x 150 maps
+  ASSERT_EQ(reused.buffers.sigma.size(), big.size());
+  for (int k = 0; k < 4; ++k) {
+    add(reused, frames[k], nullptr, 2);
+    add(fresh, frames[k], nullptr, 2);
+  }
+  EXPECT_EQ(reused.count, fresh.count);
+  EXPECT_EQ(reused.average.x, fresh.average.x);
+  EXPECT_EQ(reused.average.y, fresh.average.y);
+  EXPECT_EQ(reused.average.z, fresh.average.z);
+  EXPECT_EQ(reused.average.valid, fresh.average.valid);
+  EXPECT_EQ(fresh.count[60 * 160 + 80], kLength) << "the frames were averaged, not started over";
+}

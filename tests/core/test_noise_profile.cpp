@@ -54,6 +54,31 @@ TEST(NoiseProfile, VectorizedInterpolationIsTheScalarOne)
     }
 }
 
+// The interpolation by several threads, in blocks of points, is the one-call interpolation to the
+// bit, with and without a second profile, for sizes that do not fill the last block.
+TEST(NoiseProfile, ThreadedInterpolationIsTheSerialOne)
+{
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const std::vector<float> range = {0.5f, 0.9f, 1.4f, 2.0f, 2.7f, 3.5f}, sigma = {1, 3, 2, 5, 4, 6},
+                           extent = {6, 5, 4, 3, 2, 1};
+  for (std::size_t n : {std::size_t(1), std::size_t(4095), std::size_t(3 * 4096 + 123)}) {
+    std::vector<float> at(n);
+    for (float& r : at)
+      r = 4.0f * u(rng);
+    std::vector<float> s1(n), e1(n);
+    detail::interpolateProfile(range, sigma, at.data(), s1.data(), n, &extent, e1.data());
+    for (int threads : {1, 2, 3}) {
+      std::vector<float> s(n, -1.0f), e(n, -1.0f), alone(n, -1.0f);
+      detail::interpolateProfile(range, sigma, at.data(), s.data(), n, threads, &extent, e.data());
+      detail::interpolateProfile(range, sigma, at.data(), alone.data(), n, threads);
+      EXPECT_EQ(std::memcmp(s.data(), s1.data(), n * sizeof(float)), 0) << n << " points, " << threads << " threads";
+      EXPECT_EQ(std::memcmp(e.data(), e1.data(), n * sizeof(float)), 0) << n << " points, " << threads << " threads";
+      EXPECT_EQ(std::memcmp(alone.data(), s1.data(), n * sizeof(float)), 0) << n << " points, " << threads;
+    }
+  }
+}
+
 // The noise profile's sampled windows and the noise correlation's lags are evaluated by several
 // threads: the same result as one thread, to the bit.
 TEST(NoiseProfile, EstimatesDoNotDependOnTheThreadCount)

@@ -193,6 +193,14 @@ struct RunningAverage
   Grid average;
   /// Frames the average stands for per pixel (0: no history).
   std::vector<std::uint16_t> count;
+  /// Storage updateRunningAverage reuses from one call to the next (frame-sized maps of its test
+  /// of change), so that a stream allocates and clears none per frame. Holds nothing between
+  /// calls that the result depends on.
+  struct Buffers
+  {
+    std::vector<float> rho_frame, rho_history, sigma, along, noise, ratios;
+    std::vector<unsigned char> changed;
+  } buffers;
   bool empty() const { return average.size() == 0; }
 };
 

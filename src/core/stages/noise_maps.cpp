@@ -16,11 +16,7 @@ detail::profileMap(const FrameContext& ctx, const std::vector<float>& xs, const 
   out.resize(n);
   if (out2)
     out2->resize(n);
-  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n), block = 4096;
-#pragma omp parallel for schedule(static) num_threads(ctx.threads)
-  for (std::ptrdiff_t lo = 0; lo < size; lo += block)
-    interpolateProfile(xs, ys, &rho[lo], &out[lo], static_cast<std::size_t>(std::min(block, size - lo)), ys2,
-                       out2 ? &(*out2)[lo] : nullptr);
+  interpolateProfile(xs, ys, rho.data(), out.data(), n, ctx.threads, ys2, out2 ? out2->data() : nullptr);
 }
 
 const std::vector<float>&
