@@ -149,6 +149,27 @@ medianOfField(const std::vector<Sample>& samples, std::size_t lo, std::size_t hi
   return detail::medianOf(values);
 }
 
+/// The samples of the slots marked kept, in slot order.
+template <typename Sample>
+std::vector<Sample>
+keptSamples(const std::vector<Sample>& slots, const std::vector<unsigned char>& kept)
+{
+  std::vector<Sample> found;
+  found.reserve(slots.size());
+  for (std::size_t s = 0; s < slots.size(); ++s)
+    if (kept[s])
+      found.push_back(slots[s]);
+  return found;
+}
+
+/// The range of pixel k's point from the viewpoint, in double.
+double
+rangeOfPoint(const Grid& grid, int k, const Viewpoint& viewpoint)
+{
+  const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
 /// The bins' ranges made strictly increasing: equal ranges (e.g. a fronto-parallel plane) would
 /// make interpolation degenerate.
 void
@@ -258,18 +279,13 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
     double smallest = 0.0;
     Eigen::Vector3d normal;
     pcl::eigen33(cov, smallest, normal);
-    const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
-    const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double rho = rangeOfPoint(grid, k, viewpoint);
     if (!(rho > 0.0))
       continue;
     slots[s] = Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)};
     kept[s] = 1;
   }
-  std::vector<Sample> found;
-  found.reserve(picked.size());
-  for (std::size_t s = 0; s < picked.size(); ++s)
-    if (kept[s])
-      found.push_back(slots[s]);
+  std::vector<Sample> found = keptSamples(slots, kept);
   if (found.empty())
     throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
   std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
@@ -344,18 +360,13 @@ detail::estimatePatchSpread(const Grid& grid, const NormalField& normals, int se
       continue;
     const std::size_t at = std::min(sims.size() - 1, static_cast<std::size_t>(q * double(sims.size() - 1) + 0.5));
     std::nth_element(sims.begin(), sims.begin() + static_cast<std::ptrdiff_t>(at), sims.end());
-    const double dx = grid.x[k] - viewpoint[0], dy = grid.y[k] - viewpoint[1], dz = grid.z[k] - viewpoint[2];
-    const double rho = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double rho = rangeOfPoint(grid, k, viewpoint);
     if (!(rho > 0.0))
       continue;
     slots[s] = Sample{float(rho), sims[at]};
     kept[s] = 1;
   }
-  std::vector<Sample> found;
-  found.reserve(picked.size());
-  for (std::size_t s = 0; s < picked.size(); ++s)
-    if (kept[s])
-      found.push_back(slots[s]);
+  std::vector<Sample> found = keptSamples(slots, kept);
   if (found.empty())
     return;
   std::stable_sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
