@@ -149,11 +149,19 @@ medianOfField(const std::vector<Sample>& samples, std::size_t lo, std::size_t hi
   return detail::medianOf(values);
 }
 
-/// The samples of the slots marked kept, in slot order.
-template <typename Sample>
+/// evaluate(k, sample) at every picked pixel k by `threads` threads, each into a slot of its own;
+/// the samples for which it returned true, in the order picked (whatever the threads).
+template <typename Sample, typename Evaluate>
 std::vector<Sample>
-keptSamples(const std::vector<Sample>& slots, const std::vector<unsigned char>& kept)
+evaluateSamples(const std::vector<int>& picked, int threads, const Evaluate& evaluate)
 {
+  const int samples = static_cast<int>(picked.size());
+  std::vector<Sample> slots(picked.size());
+  std::vector<unsigned char> kept(picked.size(), 0);
+  (void)threads;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
+  for (int s = 0; s < samples; ++s)
+    kept[s] = evaluate(picked[s], slots[s]) ? 1 : 0;
   std::vector<Sample> found;
   found.reserve(slots.size());
   for (std::size_t s = 0; s < slots.size(); ++s)
@@ -245,14 +253,8 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
   {
     float rho, sigma, extent;
   };
-  // The samples are evaluated in parallel, each into its own slot; the slots of windows that
-  // qualify are kept in sample order.
-  std::vector<Sample> slots(picked.size());
-  std::vector<unsigned char> kept(picked.size(), 0);
-  (void)threads;
-#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
-  for (int s = 0; s < samples; ++s) {
-    const int k = picked[s];
+  // Each sampled window's sigma and extent; windows of too few points are left out.
+  const auto evaluate = [&](int k, Sample& sample) {
     const int u = k % grid.width, v = k / grid.width;
     double sum[3] = {0, 0, 0}, sq[6] = {0, 0, 0, 0, 0, 0}, max_dist2 = 0.0;
     int count = 0;
@@ -269,7 +271,7 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
         ++count;
       }
     if (count < 4)
-      continue;
+      return false;
     const double inv = 1.0 / count;
     const double mx = sum[0] * inv, my = sum[1] * inv, mz = sum[2] * inv;
     Eigen::Matrix3d cov;
@@ -281,11 +283,11 @@ detail::estimateNoiseProfile(const Grid& grid, int search_window, int samples, s
     pcl::eigen33(cov, smallest, normal);
     const double rho = rangeOfPoint(grid, k, viewpoint);
     if (!(rho > 0.0))
-      continue;
-    slots[s] = Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)};
-    kept[s] = 1;
-  }
-  std::vector<Sample> found = keptSamples(slots, kept);
+      return false;
+    sample = Sample{float(rho), float(std::sqrt(std::max(0.0, smallest))), float(std::sqrt(max_dist2) / rho)};
+    return true;
+  };
+  std::vector<Sample> found = evaluateSamples<Sample>(picked, threads, evaluate);
   if (found.empty())
     throw UnfilterableFrame("range_nlm: no sampled window has 4 valid points; cannot estimate the noise");
   std::sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
@@ -322,12 +324,8 @@ detail::estimatePatchSpread(const Grid& grid, const NormalField& normals, int se
   {
     float rho, sim;
   };
-  std::vector<Sample> slots(picked.size());
-  std::vector<unsigned char> kept(picked.size(), 0);
-  (void)threads;
-#pragma omp parallel for schedule(dynamic, 16) num_threads(detail::resolveThreads(threads))
-  for (int s = 0; s < samples; ++s) {
-    const int k = picked[s];
+  // Each sampled point's low quantile of Sim to its candidates; points without one are left out.
+  const auto evaluate = [&](int k, Sample& sample) {
     const int u = k % grid.width, v = k / grid.width;
     const double nx = normals.nx[k], ny = normals.ny[k], nz = normals.nz[k];
     std::vector<float> sims;
@@ -357,16 +355,16 @@ detail::estimatePatchSpread(const Grid& grid, const NormalField& normals, int se
           sims.push_back(static_cast<float>(sum / pairs));
       }
     if (sims.empty())
-      continue;
+      return false;
     const std::size_t at = std::min(sims.size() - 1, static_cast<std::size_t>(q * double(sims.size() - 1) + 0.5));
     std::nth_element(sims.begin(), sims.begin() + static_cast<std::ptrdiff_t>(at), sims.end());
     const double rho = rangeOfPoint(grid, k, viewpoint);
     if (!(rho > 0.0))
-      continue;
-    slots[s] = Sample{float(rho), sims[at]};
-    kept[s] = 1;
-  }
-  std::vector<Sample> found = keptSamples(slots, kept);
+      return false;
+    sample = Sample{float(rho), sims[at]};
+    return true;
+  };
+  std::vector<Sample> found = evaluateSamples<Sample>(picked, threads, evaluate);
   if (found.empty())
     return;
   std::stable_sort(found.begin(), found.end(), [](const Sample& a, const Sample& b) { return a.rho < b.rho; });
