@@ -33,6 +33,9 @@ for noise in kinect stereo kinect1 tof; do
   run t1 --input-dir "$in" --output-dir "$work/out/$noise-temporal1" --temporal-radius 1
   run c1 --input-dir "$in" --output-dir "$work/out/$noise-causal1" --temporal-radius 1 --causal
   run r1 --input-dir "$in" --output-dir "$work/out/$noise-recursive1" --temporal-radius 1 --recursive
+  # The live preset, frame by frame and in its stream default (recursive, radius 1).
+  run ls --input-dir "$in" --output-dir "$work/out/$noise-live-static" --preset live
+  run lr --input-dir "$in" --output-dir "$work/out/$noise-live-recursive1" --preset live --temporal-radius 1 --recursive
 done
 in="$work/gen-stereo/noisy"
 run t2 --input-dir "$in" --output-dir "$work/out/stereo-temporal2" --temporal-radius 2
@@ -53,6 +56,8 @@ run small --input-dir "$work/small/noisy" --output-dir "$work/out/small-fast" --
 run kin-s --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-static"
 run kin-t --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-temporal1" --temporal-radius 1
 run kin-r --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-recursive1" --temporal-radius 1 --recursive
+run kin-lr --input-dir "$data/kinect-sequence" --output-dir "$work/out/kinect-sequence-live-recursive1" --preset live \
+  --temporal-radius 1 --recursive
 run milk --input "$data/milk_cartoon_all_small_clorox.pcd" --output "$work/out/milk.pcd"
 # Every folder of depth images (with the intrinsics.txt of it or of its parent), IR images left out.
 while IFS= read -r dir; do

@@ -76,6 +76,7 @@ run_mode() {
 # The node's default, the live preset: each frame alone, then its stream default (recursive,
 # radius 1), then the same with a queue of one frame (the newest frame only, the lowest latency).
 run_mode live_static _temporal_radius:=0
+run_mode live_static_queue1 _temporal_radius:=0 _queue_size:=1
 run_mode live_recursive
 run_mode live_recursive_queue1 _queue_size:=1
 # The accuracy setting for recorded data, for comparison.

@@ -86,11 +86,11 @@ detail::compareAlong(const std::vector<float>& along, int width, int height, con
           }
         if (in_block.size() < static_cast<std::size_t>(block * block / 2))
           continue;
-        const float m = medianOf(in_block);
+        const float m = medianInPlace(in_block);
         for (float& d : in_block)
           d = std::fabs(d - m);
         block_offsets[t] = std::fabs(m);
-        block_spreads[t] = medianOf(in_block);
+        block_spreads[t] = medianInPlace(in_block);
       }
     }
     std::vector<float> offsets, spreads;
@@ -173,42 +173,67 @@ differences(const ChangeBlocks& blocks, int t, int s, int step, std::vector<floa
 {
   const int block = blocks.block, columns = blocks.columns, width = blocks.width, height = blocks.height;
   const int v0 = (t / columns) * block, u0 = (t % columns) * block;
-  diff.clear();
+  const int sx = kShifts[s][0], sy = kShifts[s][1];
+  // The pixels of the block whose shifted pixel lies in the frame, in the order of the lattice.
+  int u_first = u0;
+  while (u_first + sx < 0)
+    u_first += step;
+  const int u_end = std::min(u0 + block, width - sx);
+  const int side = (block + step - 1) / step;
+  diff.resize(static_cast<std::size_t>(side) * side);
+  float* out = diff.data();
+  std::size_t kept = 0;
+  const unsigned char* __restrict va = blocks.a.valid.data();
+  const unsigned char* __restrict vb = blocks.b.valid.data();
+  const float* __restrict ra = blocks.rho_a.data();
+  const float* __restrict rb = blocks.rho_b.data();
   for (int v = v0; v < v0 + block; v += step) {
-    const int vb = v + kShifts[s][1];
-    if (vb < 0 || vb >= height)
+    const int vb_row = v + sy;
+    if (vb_row < 0 || vb_row >= height)
       continue;
-    for (int u = u0; u < u0 + block; u += step) {
-      const int ub = u + kShifts[s][0];
-      if (ub < 0 || ub >= width)
-        continue;
-      const std::size_t i = static_cast<std::size_t>(v) * width + u, j = static_cast<std::size_t>(vb) * width + ub;
-      if (blocks.a.valid[i] && blocks.b.valid[j])
-        diff.push_back(blocks.rho_b[j] - blocks.rho_a[i]);
+    const std::size_t row = static_cast<std::size_t>(v) * width;
+    const std::ptrdiff_t shift = static_cast<std::ptrdiff_t>(sy) * width + sx;
+    for (int u = u_first; u < u_end; u += step) {
+      const std::size_t i = row + u;
+      const std::size_t j = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(i) + shift);
+      out[kept] = rb[j] - ra[i];
+      kept += (va[i] & vb[j]) != 0;
     }
   }
-  const int side = (block + step - 1) / step;
-  return diff.size() >= static_cast<std::size_t>(side * side / 2);
+  diff.resize(kept);
+  return kept >= static_cast<std::size_t>(side * side / 2);
 }
 
-/// The mean absolute deviation of `diff` (not empty) from its mean.
+/// The mean absolute deviation of `diff` (not empty) from its mean. Four partial sums in double
+/// (exact for these floats but for the rounding of a deviation's last bit), so that the adds do
+/// not wait on each other.
 double
 meanDeviation(const std::vector<float>& diff)
 {
-  double sum = 0.0, absolute = 0.0;
-  for (float d : diff)
-    sum += d;
-  const double mean = sum / static_cast<double>(diff.size());
-  for (float d : diff)
-    absolute += std::fabs(d - mean);
-  return absolute / static_cast<double>(diff.size());
+  const std::size_t n = diff.size();
+  double sum[4] = {0.0, 0.0, 0.0, 0.0}, absolute[4] = {0.0, 0.0, 0.0, 0.0};
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int k = 0; k < 4; ++k)
+      sum[k] += diff[i + k];
+  for (; i < n; ++i)
+    sum[0] += diff[i];
+  const double mean = ((sum[0] + sum[1]) + (sum[2] + sum[3])) / static_cast<double>(n);
+  for (i = 0; i + 4 <= n; i += 4)
+    for (int k = 0; k < 4; ++k)
+      absolute[k] += std::fabs(diff[i + k] - mean);
+  for (; i < n; ++i)
+    absolute[0] += std::fabs(diff[i] - mean);
+  return ((absolute[0] + absolute[1]) + (absolute[2] + absolute[3])) / static_cast<double>(n);
 }
 
-/// Per block: the median range difference and its spread (the median distance from it); NaN
-/// where too few pixels are valid in both frames.
+/// Per block: the median range difference and its spread (the median distance from it), and the
+/// mean absolute deviation of the differences (the structure test's deviation without a shift);
+/// NaN where too few pixels are valid in both frames.
 struct BlockStatistics
 {
   std::vector<float> medians, spreads;
+  std::vector<double> deviations;
 };
 
 /// BlockStatistics of every block. Each block by one thread into its own slots; a median does not
@@ -222,8 +247,10 @@ blockStatistics(const ChangeBlocks& blocks, int threads)
   BlockStatistics stats;
   stats.medians.assign(static_cast<std::size_t>(columns) * rows, nan);
   stats.spreads = stats.medians;
+  stats.deviations.assign(stats.medians.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<float>& medians = stats.medians;
   std::vector<float>& spreads = stats.spreads;
+  std::vector<double>& deviations = stats.deviations;
   (void)threads;
 #pragma omp parallel num_threads(detail::resolveThreads(threads))
   {
@@ -232,11 +259,12 @@ blockStatistics(const ChangeBlocks& blocks, int threads)
     for (int t = 0; t < columns * rows; ++t) {
       if (!differences(blocks, t, 0, 2, diff))
         continue;
-      const float m = detail::medianOf(diff);
+      deviations[t] = meanDeviation(diff); // (in the order taken, before the medians reorder them)
+      const float m = detail::medianInPlace(diff);
       for (float& d : diff)
         d = std::fabs(d - m);
       medians[t] = m;
-      spreads[t] = detail::medianOf(diff);
+      spreads[t] = detail::medianInPlace(diff);
     }
   }
   return stats;
@@ -325,9 +353,10 @@ fitIsSmooth(const std::vector<BlockSample>& samples, const Quadratic& coefficien
 /// kShiftedDeviation times smaller than no shift; the structure moved if at least
 /// kMinStructuredBlocks are structured and one in kStructuredPerShifted of them shows a shift.
 bool
-structureMoved(const ChangeBlocks& blocks, const std::vector<float>& medians, int threads)
+structureMoved(const ChangeBlocks& blocks, const BlockStatistics& stats, int threads)
 {
   const int columns = blocks.columns, rows = blocks.rows;
+  const std::vector<float>& medians = stats.medians;
   std::vector<unsigned char> structured(medians.size(), 0), shifted(medians.size(), 0);
   (void)threads;
 #pragma omp parallel num_threads(detail::resolveThreads(threads))
@@ -335,9 +364,9 @@ structureMoved(const ChangeBlocks& blocks, const std::vector<float>& medians, in
     std::vector<float> diff;
 #pragma omp for schedule(dynamic, 4)
     for (int t = 0; t < columns * rows; ++t) {
-      if (std::isnan(medians[t]) || !differences(blocks, t, 0, 2, diff))
+      if (std::isnan(medians[t]))
         continue;
-      const double still = meanDeviation(diff);
+      const double still = stats.deviations[t];
       double largest = 0.0, smallest = std::numeric_limits<double>::infinity();
       for (int s = 1; s < 9; ++s)
         if (differences(blocks, t, s, 2, diff)) {
@@ -408,7 +437,7 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
     return result;
   }
   // Smooth: did the image's structure move? Each block against `b` as it is and shifted.
-  if (structureMoved(blocks, stats.medians, threads)) {
+  if (structureMoved(blocks, stats, threads)) {
     result.change = FrameChange::motion;
     return result;
   }

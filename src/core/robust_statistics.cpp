@@ -14,6 +14,12 @@ namespace range_nlm
 float
 detail::medianOf(std::vector<float> v)
 {
+  return medianInPlace(v);
+}
+
+float
+detail::medianInPlace(std::vector<float>& v)
+{
   const std::size_t mid = v.size() / 2;
   std::nth_element(v.begin(), v.begin() + mid, v.end());
   return v[mid];

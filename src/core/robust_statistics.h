@@ -13,6 +13,9 @@ namespace detail
 /// finds it.
 float
 medianOf(std::vector<float> v);
+/// medianOf(v) without the copy: `v` (not empty) is reordered.
+float
+medianInPlace(std::vector<float>& v);
 /// The median (the value at rank count / 2 from 0, as std::nth_element finds it) of the count
 /// values[i] >= 0 with mask[i] set (every i if mask is null) among n, by `threads` threads; NaN
 /// if there is none. `count` (if given) receives that count.
