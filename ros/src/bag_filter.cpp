@@ -279,7 +279,9 @@ private:
         out_->write(options_.topic, p.time, *p.message, p.connection_header);
         continue;
       }
-      out_->write(options_.topic, p.time, *pointCloud2WithXyz(*p.message, *out.cloud), p.connection_header);
+      out_->write(options_.topic, p.time,
+                  *pointCloud2WithXyz(*p.message, *out.cloud, options_.settings.parameters.threads),
+                  p.connection_header);
     }
   }
 

@@ -7,6 +7,10 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -82,6 +86,24 @@ writeCoordinate(std::uint8_t* point, const Coordinate& c, float value)
   } else {
     std::memcpy(point + c.offset, &value, sizeof value);
   }
+}
+
+/// `threads` if > 0, else OpenMP's default (1 without OpenMP).
+int
+resolvedThreads(int threads)
+{
+#ifdef _OPENMP
+  return threads > 0 ? threads : omp_get_max_threads();
+#else
+  return threads > 0 ? threads : 1;
+#endif
+}
+
+/// The threads of `parameters` (FilterParameters::threads), else OpenMP's default.
+int
+threadsOf(const range_nlm::FilterParameters* parameters)
+{
+  return resolvedThreads(parameters ? parameters->threads : 0);
 }
 
 /// The smallest side of a frame any parameters can filter: the smallest normal window.
@@ -181,44 +203,72 @@ cloudFromPointCloud2(const sensor_msgs::PointCloud2& message, const range_nlm::F
   Cloud::Ptr cloud(new Cloud(message.width, message.height));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const double largest = std::numeric_limits<float>::max();
-  bool dense = true;
-  for (std::size_t i = 0; i < cloud->size(); ++i) {
-    const std::uint8_t* p = &message.data[i * message.point_step];
+  // Decoded by the filter's threads; an out-of-range coordinate is reported at the first such
+  // pixel in row order, whichever thread met it (the cloud is then dropped whole).
+  const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(cloud->size());
+  std::ptrdiff_t bad = n;
+  unsigned dense = 1;
+  (void)parameters;
+#pragma omp parallel for schedule(static) reduction(min : bad) reduction(& : dense) num_threads(threadsOf(parameters))
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const std::uint8_t* p = &message.data[static_cast<std::size_t>(i) * message.point_step];
     const double x = readCoordinate(p, layout.x), y = readCoordinate(p, layout.y), z = readCoordinate(p, layout.z);
     pcl::PointXYZ& q = (*cloud)[i];
     if (std::isnan(x) || std::isnan(y) || std::isnan(z)) {
       q.x = q.y = q.z = nan;
-      dense = false;
+      dense = 0;
       continue;
     }
-    if (!(std::fabs(x) <= largest && std::fabs(y) <= largest && std::fabs(z) <= largest))
-      throw InvalidMessage("PointCloud2 has an infinite (or out of float range) coordinate at pixel (" +
-                           std::to_string(i % message.width) + ", " + std::to_string(i / message.width) +
-                           "); invalid points must be NaN");
+    if (!(std::fabs(x) <= largest && std::fabs(y) <= largest && std::fabs(z) <= largest)) {
+      bad = std::min(bad, i);
+      continue;
+    }
     q.x = float(x), q.y = float(y), q.z = float(z);
   }
-  cloud->is_dense = dense;
+  if (bad < n)
+    throw InvalidMessage("PointCloud2 has an infinite (or out of float range) coordinate at pixel (" +
+                         std::to_string(bad % message.width) + ", " + std::to_string(bad / message.width) +
+                         "); invalid points must be NaN");
+  cloud->is_dense = dense != 0;
   return cloud;
 }
 
 sensor_msgs::PointCloud2::Ptr
-pointCloud2WithXyz(const sensor_msgs::PointCloud2& message, const Cloud& xyz)
+pointCloud2WithXyz(const sensor_msgs::PointCloud2& message, const Cloud& xyz, int threads)
 {
   const CloudLayout layout = checkedLayout(message);
   if (xyz.width != message.width || xyz.height != message.height)
     throw InvalidMessage("filtered cloud of " + sizeText(xyz.width, xyz.height) + " for a PointCloud2 of " +
                          sizeText(message.width, message.height));
-  sensor_msgs::PointCloud2::Ptr out(new sensor_msgs::PointCloud2(message));
-  bool dense = true;
-  for (std::size_t i = 0; i < xyz.size(); ++i) {
-    std::uint8_t* p = &out->data[i * out->point_step];
-    const pcl::PointXYZ& q = xyz[i];
-    writeCoordinate(p, layout.x, q.x);
-    writeCoordinate(p, layout.y, q.y);
-    writeCoordinate(p, layout.z, q.z);
-    dense = dense && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+  // Everything but the data copied as it is; the data copied row by row by the threads, each row
+  // followed at once by its new coordinates (one pass over the bytes, not two).
+  sensor_msgs::PointCloud2::Ptr out(new sensor_msgs::PointCloud2);
+  out->header = message.header;
+  out->height = message.height;
+  out->width = message.width;
+  out->fields = message.fields;
+  out->is_bigendian = message.is_bigendian;
+  out->point_step = message.point_step;
+  out->row_step = message.row_step;
+  out->data.resize(message.data.size());
+  const std::ptrdiff_t rows = static_cast<std::ptrdiff_t>(message.height);
+  const std::size_t width = message.width, row_bytes = message.row_step;
+  unsigned dense = 1;
+  (void)threads;
+#pragma omp parallel for schedule(static) reduction(& : dense) num_threads(resolvedThreads(threads))
+  for (std::ptrdiff_t v = 0; v < rows; ++v) {
+    std::uint8_t* row = out->data.data() + static_cast<std::size_t>(v) * row_bytes;
+    std::memcpy(row, message.data.data() + static_cast<std::size_t>(v) * row_bytes, row_bytes);
+    for (std::size_t u = 0; u < width; ++u) {
+      std::uint8_t* p = row + u * message.point_step;
+      const pcl::PointXYZ& q = xyz[static_cast<std::size_t>(v) * width + u];
+      writeCoordinate(p, layout.x, q.x);
+      writeCoordinate(p, layout.y, q.y);
+      writeCoordinate(p, layout.z, q.z);
+      dense &= std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+    }
   }
-  out->is_dense = dense;
+  out->is_dense = dense != 0;
   return out;
 }
 

@@ -209,7 +209,8 @@ TemporalFilterNodelet::publishClouds(const std::vector<CloudStream::Output>& rea
       continue;
     }
     try {
-      output_.publish(sensor_msgs::PointCloud2::ConstPtr(pointCloud2WithXyz(*out.tag, *out.cloud)));
+      output_.publish(sensor_msgs::PointCloud2::ConstPtr(
+          pointCloud2WithXyz(*out.tag, *out.cloud, cloud_stream_->parameters().threads)));
       publishUncertainty(out.tag->header, *out.cloud, out.uncertainty);
       publishFilledMask(out.tag->header, *out.cloud, out.filled);
       statistics_.published((ros::Time::now() - out.tag->header.stamp).toSec(), out.milliseconds);

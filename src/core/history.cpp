@@ -28,7 +28,7 @@ startOver(RunningAverage& history, const Grid& frame, const Grid* start, std::ui
   history.count[i] = from_start ? started : frame.valid[i] ? 1 : 0;
 }
 
-/// Every pixel's history starts over.
+/// Every pixel's history starts over: startOver at every pixel, branch-free so that it vectorizes.
 void
 restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started, int threads)
 {
@@ -41,10 +41,32 @@ restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint
   h.z.resize(n);
   h.valid.resize(n);
   history.count.resize(n);
+  float* __restrict hx = h.x.data();
+  float* __restrict hy = h.y.data();
+  float* __restrict hz = h.z.data();
+  unsigned char* __restrict hv = h.valid.data();
+  std::uint16_t* __restrict count = history.count.data();
+  const float* __restrict fx = frame.x.data();
+  const float* __restrict fy = frame.y.data();
+  const float* __restrict fz = frame.z.data();
+  const unsigned char* __restrict fv = frame.valid.data();
+  // Without a start, the frame stands in for it with no pixel of its own.
+  const bool has_start = start != nullptr;
+  const float* __restrict sx = has_start ? start->x.data() : fx;
+  const float* __restrict sy = has_start ? start->y.data() : fy;
+  const float* __restrict sz = has_start ? start->z.data() : fz;
+  const unsigned char* __restrict sv = has_start ? start->valid.data() : fv;
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (std::ptrdiff_t i = 0; i < size; ++i)
-    startOver(history, frame, start, started, static_cast<std::size_t>(i));
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i) {
+    const bool valid = fv[i] != 0;
+    const bool from_start = has_start && valid && sv[i] != 0;
+    hx[i] = from_start ? sx[i] : fx[i];
+    hy[i] = from_start ? sy[i] : fy[i];
+    hz[i] = from_start ? sz[i] : fz[i];
+    hv[i] = fv[i];
+    count[i] = from_start ? started : static_cast<std::uint16_t>(valid ? 1 : 0);
+  }
 }
 
 } // namespace

@@ -368,6 +368,29 @@ TEST(TemporalFilter, ANonFiniteViewpointIsRefusedAndTheStreamGoesOn)
             std::string::npos);
 }
 
+// The stream's check of every point runs on the filter's threads: whatever their number, the
+// error names the first infinite point in row order, and the frame can be skipped.
+TEST(TemporalFilter, AnInfiniteCoordinateIsReportedAtItsFirstPixelWhateverTheThreads)
+{
+  const auto frames = sequence(2, 0, 0.003, 71);
+  Cloud::Ptr bad(new Cloud(*frames[1]));
+  const std::uint32_t w = bad->width;
+  (*bad)[(bad->height - 2) * w + 9].z = INFINITY; // in the last thread's rows
+  (*bad)[3 * w + 6].x = -INFINITY;                // the first in row order
+  (*bad)[3 * w + 20].y = INFINITY;
+  for (int threads : {1, 2, 3}) {
+    FilterParameters p = FilterParameters::recommended();
+    p.threads = threads;
+    TemporalStream<pcl::PointXYZ> stream(0, false, p);
+    ASSERT_EQ(stream.push(frames[0]).size(), 1u);
+    EXPECT_NE(test::errorOf([&] { stream.push(bad); })
+                  .find("frame 1 has an infinite coordinate at pixel (6, 3); invalid points must be NaN"),
+              std::string::npos)
+        << threads << " threads";
+    EXPECT_EQ(stream.push(frames[1]).size(), 1u) << threads << " threads";
+  }
+}
+
 TEST(TemporalFilter, StreamPassesAnAllNanFrameThroughAndGoesOn)
 {
   const FilterParameters p = FilterParameters::recommended();

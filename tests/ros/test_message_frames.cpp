@@ -1,6 +1,7 @@
 // ROS messages -> organized frames: a PointCloud2 whose layout is ambiguous (an x field twice, an x
 // of no elements) is refused as the PCD reader refuses such a header, and a cloud too small for
-// the windows is refused before it is decoded.
+// the windows is refused before it is decoded. The conversions run on the filter's threads and
+// give the same cloud, message and first error whatever their number.
 #include "ros_test_support.h"
 #include "test_support.h"
 
@@ -10,11 +11,16 @@
 
 #include <sys/resource.h>
 
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <string>
 
 using namespace range_nlm;
 using range_nlm_ros::cloudFromPointCloud2;
 using range_nlm_ros::InvalidMessage;
+using range_nlm_ros::pointCloud2WithXyz;
+using Cloud = range_nlm_ros::Cloud;
 
 namespace
 {
@@ -89,4 +95,78 @@ TEST(MessageFrames, CloudTooSmallForTheWindowsIsRefusedBeforeItIsDecoded)
   wide.search_window = 13;
   EXPECT_EQ(refusal(small, &wide),
             "PointCloud2 of 16 x 12: range_nlm: parameter search_window = 13 is larger than the cloud (16 x 12)");
+}
+
+namespace
+{
+
+/// Writes `value` into coordinate `field` (0: x, 1: y, 2: z) of pixel (u, v) of a FLOAT32 message.
+void
+setCoordinate(sensor_msgs::PointCloud2& message, int u, int v, int field, float value)
+{
+  std::uint8_t* p = &message.data[(std::size_t(v) * message.width + u) * message.point_step];
+  std::memcpy(p + message.fields[field].offset, &value, sizeof value);
+}
+
+} // namespace
+
+// Decoded by 1, 2 or 3 threads: the same cloud (NaN points and is_dense included), and a cloud
+// with infinite coordinates is refused naming the first of them in row order.
+TEST(MessageFrames, DecodingGivesTheSameCloudAndFirstErrorWhateverTheThreads)
+{
+  sensor_msgs::PointCloud2 message =
+      test::toPointCloud2(test::makeCloud(64, 48, test::plane({0.0, 0.0, 1.0}, 1.0), 0.001, 5), 1, 0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  setCoordinate(message, 10, 40, 1, nan);
+  FilterParameters one;
+  one.threads = 1;
+  const Cloud::Ptr reference = cloudFromPointCloud2(message, &one);
+  EXPECT_FALSE(reference->is_dense);
+  EXPECT_TRUE(std::isnan((*reference)(10, 40).x));
+  sensor_msgs::PointCloud2 infinite = message;
+  setCoordinate(infinite, 30, 44, 2, INFINITY);
+  setCoordinate(infinite, 7, 5, 0, -INFINITY);
+  setCoordinate(infinite, 50, 5, 1, INFINITY);
+  for (int threads : {1, 2, 3}) {
+    FilterParameters p;
+    p.threads = threads;
+    const Cloud::Ptr cloud = cloudFromPointCloud2(message, &p);
+    EXPECT_EQ(test::compareXyz(*cloud, *reference), "") << threads << " threads";
+    EXPECT_EQ(cloud->is_dense, reference->is_dense);
+    EXPECT_EQ(refusal(infinite, &p), "PointCloud2 has an infinite (or out of float range) coordinate at pixel (7, 5); "
+                                     "invalid points must be NaN")
+        << threads << " threads";
+  }
+}
+
+// The filtered coordinates written into a copy of the message by 1, 2 or 3 threads: every other
+// byte as it was, x, y, z those of the cloud, is_dense recomputed.
+TEST(MessageFrames, WritingTheCoordinatesKeepsEveryOtherByteWhateverTheThreads)
+{
+  const sensor_msgs::PointCloud2 message =
+      test::toPointCloud2(test::makeCloud(64, 48, test::plane({0.0, 0.0, 1.0}, 1.0), 0.001, 6), 1, 0);
+  Cloud filtered = *cloudFromPointCloud2(message);
+  for (pcl::PointXYZ& q : filtered.points)
+    q.z += 0.25f;
+  filtered(3, 47).x = std::numeric_limits<float>::quiet_NaN();
+  for (int threads : {1, 2, 3}) {
+    const sensor_msgs::PointCloud2::Ptr out = pointCloud2WithXyz(message, filtered, threads);
+    EXPECT_EQ(test::compareXyz(test::xyzOf(*out), filtered), "") << threads << " threads";
+    EXPECT_FALSE(out->is_dense);
+    EXPECT_EQ(out->header.stamp, message.header.stamp);
+    EXPECT_EQ(out->header.frame_id, message.header.frame_id);
+    ASSERT_EQ(out->data.size(), message.data.size());
+    ASSERT_EQ(out->fields.size(), message.fields.size());
+    std::vector<bool> coordinate(message.point_step, false);
+    for (int f = 0; f < 3; ++f)
+      for (std::uint32_t b = 0; b < 4; ++b)
+        coordinate[message.fields[f].offset + b] = true;
+    std::size_t other_bytes_changed = 0;
+    for (std::size_t i = 0; i < message.data.size(); ++i)
+      other_bytes_changed += !coordinate[i % message.point_step] && out->data[i] != message.data[i];
+    EXPECT_EQ(other_bytes_changed, 0u) << threads << " threads";
+  }
+  Cloud dense = filtered;
+  dense(3, 47).x = 0.0f;
+  EXPECT_TRUE(pointCloud2WithXyz(message, dense, 2)->is_dense);
 }

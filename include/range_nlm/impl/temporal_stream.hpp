@@ -11,8 +11,25 @@
 #include <utility>
 #include <vector>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace range_nlm
 {
+namespace detail
+{
+/// `threads` if > 0, else OpenMP's default (1 without OpenMP).
+inline int
+streamThreads(int threads)
+{
+#ifdef _OPENMP
+  return threads > 0 ? threads : omp_get_max_threads();
+#else
+  return threads > 0 ? threads : 1;
+#endif
+}
+} // namespace detail
 
 template <typename PointT>
 TemporalStream<PointT>::TemporalStream(int radius, TemporalWindow window, const FilterParameters& parameters)
@@ -153,13 +170,19 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
       throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) + " holds " +
                                   std::to_string(frame->points.size()) + " points but declares width x height = " +
                                   std::to_string(frame->width) + " x " + std::to_string(frame->height));
-    for (std::size_t i = 0; i < frame->points.size(); ++i) {
+    // The first infinite coordinate in row order, whichever thread meets it.
+    const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(frame->points.size());
+    std::ptrdiff_t infinite = n;
+#pragma omp parallel for schedule(static) reduction(min : infinite) num_threads(detail::streamThreads(parameters_.threads))
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
       const PointT& p = frame->points[i];
       if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
-        throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) +
-                                    " has an infinite coordinate at pixel (" + std::to_string(i % frame->width) +
-                                    ", " + std::to_string(i / frame->width) + "); invalid points must be NaN");
+        infinite = std::min(infinite, i);
     }
+    if (infinite < n)
+      throw std::invalid_argument("range_nlm: frame " + std::to_string(pushed_) +
+                                  " has an infinite coordinate at pixel (" + std::to_string(infinite % frame->width) +
+                                  ", " + std::to_string(infinite / frame->width) + "); invalid points must be NaN");
     checkViewpoint({frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]},
                    "the viewpoint (sensor origin) of frame " + std::to_string(pushed_));
     if (width_ == 0 && height_ == 0) {

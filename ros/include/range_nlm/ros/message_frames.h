@@ -37,14 +37,16 @@ struct InvalidMessage : std::invalid_argument
 /// row_step * height bytes, its byte order is not the host's, or a coordinate is infinite; if a
 /// field name appears twice or has COUNT 0 (as the PCD reader: io::fieldLayoutProblem); and,
 /// before a point is decoded, if the cloud is smaller than the smallest window of any parameters
-/// (3 x 3) or, given `parameters`, than their windows (FilterParameters::validateFor).
+/// (3 x 3) or, given `parameters`, than their windows (FilterParameters::validateFor). Decoded
+/// by the threads of `parameters` (FilterParameters::threads), else by OpenMP's default.
 Cloud::Ptr
 cloudFromPointCloud2(const sensor_msgs::PointCloud2& message, const range_nlm::FilterParameters* parameters = nullptr);
 
 /// A copy of `message` whose x, y, z are those of `xyz` (same size): every other byte, the
-/// header and the layout unchanged; is_dense recomputed.
+/// header and the layout unchanged; is_dense recomputed. Written by `threads` threads (0: OpenMP's
+/// default).
 sensor_msgs::PointCloud2::Ptr
-pointCloud2WithXyz(const sensor_msgs::PointCloud2& message, const Cloud& xyz);
+pointCloud2WithXyz(const sensor_msgs::PointCloud2& message, const Cloud& xyz, int threads = 0);
 
 /// Back-projects a depth image through the pinhole of `info` (K: fx, fy, cx, cy), as
 /// range_nlm::depthImageToCloud does: x = (u - cx) z / fx, y = (v - cy) z / fy. 16UC1 values
