@@ -11,6 +11,8 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -47,6 +49,10 @@ enum class TemporalWindow
 /// start and end), so output lags input by r frames. Causal mode: the window is t - r .. t and
 /// every frame comes out as soon as it is pushed. flush() ends the sequence; every pushed frame
 /// yields exactly one output frame, in order. At most 2r + 1 (causal: r + 1) frames are held.
+/// Each output is the caller's alone until it lets go of it (its last shared pointer is gone, on
+/// any thread, also after the stream itself): then its storage may hold a later output of the
+/// stream instead of being freed (at most two such clouds are kept), so that a stream at camera
+/// rate allocates no frame per frame. A weak pointer to a released output expires as usual.
 template <typename PointT>
 class TemporalStream
 {
@@ -116,6 +122,22 @@ private:
     Grid grid;
   };
 
+  /// Clouds whose caller let go of them, for the next outputs (shared with their deleters).
+  struct OutputPool
+  {
+    std::mutex mutex;
+    std::vector<std::unique_ptr<PointCloud>> spare;
+  };
+  /// The deleter of an output: its storage back to the pool if the pool is still there and holds
+  /// fewer than two, else freed.
+  struct RecycleOutput
+  {
+    std::weak_ptr<OutputPool> pool;
+    void operator()(PointCloud* cloud) const;
+  };
+  /// An output cloud: a spare one (its points still there, to be overwritten) or a new one.
+  CloudPtr newOutput();
+
   CloudPtr filterAt(std::size_t t);
   /// Frame t's grid, converted on first use; `position` is its index in the window being filtered
   /// (for the error message).
@@ -144,6 +166,7 @@ private:
   std::vector<OutputInfo> last_outputs_;
   /// One workspace for the whole sequence, so that its buffers are reused from frame to frame.
   FilterWorkspace workspace_;
+  std::shared_ptr<OutputPool> pool_ = std::make_shared<OutputPool>();
 };
 
 /// Batch form: filters a whole sequence with the same windows as TemporalStream.

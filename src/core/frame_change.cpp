@@ -404,11 +404,18 @@ evaluateOffsetField(const Quadratic& coefficients, int width, int height, int th
 FrameOffset
 detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads)
 {
+  std::vector<float> rho_a, rho_b;
+  return analyseFrameChange(a, b, viewpoint, threads, rho_a, rho_b);
+}
+
+FrameOffset
+detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads,
+                           std::vector<float>& rho_a, std::vector<float>& rho_b)
+{
   FrameOffset result;
   if (a.size() != b.size() || a.width <= 0 || a.height <= 0)
     return result;
   const int width = a.width, height = a.height;
-  std::vector<float> rho_a, rho_b;
   rangesOfBoth(a, b, viewpoint, threads, rho_a, rho_b);
   // The blocks of framesMoved. Per block: the median difference and its spread, and whether the
   // block is structured and shows a shift (see the header).

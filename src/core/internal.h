@@ -93,6 +93,10 @@ struct IsolatedPoint
 std::vector<IsolatedPoint>
 findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
                    const std::vector<unsigned char>& active, int threads);
+/// The same with the points' ranges in `rho` (storage reused).
+std::vector<IsolatedPoint>
+findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
+                   const std::vector<unsigned char>& active, int threads, std::vector<float>& rho);
 /// Moves each point along its ray to its new range.
 void
 moveIsolatedPoints(Grid& grid, const std::vector<IsolatedPoint>& points, const Viewpoint& viewpoint);
@@ -154,6 +158,11 @@ markChangedPixels(const std::vector<float>& along, int width, int height, const 
 /// analyseFrameChange by `threads` threads, with the same result.
 FrameOffset
 analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads);
+/// The same with the frames' ranges in `rho_a` and `rho_b` (storage reused: nothing allocated or
+/// cleared per call when their sizes match).
+FrameOffset
+analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads, std::vector<float>& rho_a,
+                   std::vector<float>& rho_b);
 /// estimateTemporalNoiseRatio by `threads` threads, with the same result.
 float
 estimateTemporalNoiseRatio(const Grid& a, const NormalField& normals_a, const Grid& b, const NoiseProfile& profile_b,

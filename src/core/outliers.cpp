@@ -44,16 +44,26 @@ std::vector<detail::IsolatedPoint>
 detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
                            const std::vector<unsigned char>& active, int threads)
 {
+  std::vector<float> rho;
+  return findIsolatedPoints(grid, profile, sigmas, viewpoint, active, threads, rho);
+}
+
+std::vector<detail::IsolatedPoint>
+detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float sigmas, const Viewpoint& viewpoint,
+                           const std::vector<unsigned char>& active, int threads, std::vector<float>& rho)
+{
   const int width = grid.width, height = grid.height;
   if (!(sigmas > 0.0f) || profile.empty() || width <= 0 || height <= 0)
     return {};
   threads = detail::resolveThreads(threads);
-  std::vector<float> rho;
   detail::rangesOf(grid, viewpoint, threads, rho);
   // A range of 0 marks a point the test leaves alone and does not compare with: invalid, at the
   // viewpoint, or so far that its range overflows.
-  for (float& r : rho)
-    r = r < std::numeric_limits<float>::infinity() ? r : 0.0f;
+  float* __restrict r = rho.data();
+  const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(rho.size());
+#pragma omp parallel for simd schedule(static) num_threads(threads)
+  for (std::ptrdiff_t i = 0; i < size; ++i)
+    r[i] = r[i] < std::numeric_limits<float>::infinity() ? r[i] : 0.0f;
   const OutlierFrame frame{rho, width, height, sigmas, profile, medianRayAngle(grid, rho)};
   return voteSides(frame, findOutlierCandidates(grid, frame, active, threads));
 }

@@ -69,6 +69,9 @@ struct Workspace
   std::vector<Workspace> levels;
   /// The current frame with its isolated outliers moved (FilterParameters::outlier_sigmas).
   Grid corrected;
+  /// Ranges of whole frames, written before they are read: the two frames of an analysis of
+  /// change between frames, and the outlier test's.
+  std::vector<float> range_scratch[2];
   /// Per-point uncertainty (FilterParameters::uncertainty): the weights' spread and effective
   /// number of candidates of a pass, the standard deviation of each point's height along its
   /// normal after the passes so far, and the one the next contiguous run starts from (the dilated

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <deque>
 
@@ -388,6 +389,59 @@ TEST(TemporalFilter, AnInfiniteCoordinateIsReportedAtItsFirstPixelWhateverTheThr
               std::string::npos)
         << threads << " threads";
     EXPECT_EQ(stream.push(frames[1]).size(), 1u) << threads << " threads";
+  }
+}
+
+// An output the caller lets go of lends its storage to a later output of the stream (no frame
+// allocated per frame at camera rate); one it still holds is never touched, a weak pointer to a
+// released one expires, and an output may outlive its stream. Every output equals that of a
+// stream whose outputs are all kept.
+TEST(TemporalFilter, StreamReusesTheStorageOfOutputsLetGoOnly)
+{
+  const auto frames = sequence(5, 0, 0.003, 72);
+  for (TemporalWindow window : {TemporalWindow::recursive, TemporalWindow::causal}) {
+    FilterParameters p = FilterParameters::live();
+    std::vector<Cloud::Ptr> kept;
+    {
+      TemporalStream<pcl::PointXYZ> reference(1, window, p);
+      for (const auto& f : frames)
+        for (auto& out : reference.push(f))
+          kept.push_back(out);
+    }
+    ASSERT_EQ(kept.size(), frames.size());
+    TemporalStream<pcl::PointXYZ> stream(1, window, p);
+    std::vector<Cloud::Ptr> first = stream.push(frames[0]);
+    ASSERT_EQ(first.size(), 1u);
+    const Cloud held_copy = *first[0];
+    const pcl::PointXYZ* held_points = first[0]->points.data();
+    // Held: the next output has storage of its own, and the held one is unchanged.
+    std::vector<Cloud::Ptr> second = stream.push(frames[1]);
+    ASSERT_EQ(second.size(), 1u);
+    EXPECT_NE(second[0]->points.data(), held_points);
+    EXPECT_TRUE(sameBits(*first[0], held_copy));
+    EXPECT_TRUE(sameBits(*second[0], *kept[1]));
+    // Let go of (a weak pointer left): the next output takes its storage, the weak pointer expires.
+    const pcl::PointXYZ* released_points = second[0]->points.data();
+    std::weak_ptr<Cloud> watcher = second[0];
+    second.clear();
+    EXPECT_TRUE(watcher.expired());
+    // (Had the storage gone back to the heap, this would likely take it.)
+    const std::vector<pcl::PointXYZ, Eigen::aligned_allocator<pcl::PointXYZ>> decoy(held_copy.size());
+    std::vector<Cloud::Ptr> third = stream.push(frames[2]);
+    ASSERT_EQ(third.size(), 1u);
+    EXPECT_NE(third[0]->points.data(), decoy.data());
+    EXPECT_EQ(third[0]->points.data(), released_points);
+    EXPECT_TRUE(sameBits(*third[0], *kept[2]));
+    EXPECT_TRUE(sameBits(*first[0], held_copy));
+    third.clear();
+    for (std::size_t k = 3; k < frames.size(); ++k) {
+      std::vector<Cloud::Ptr> out = stream.push(frames[k]);
+      ASSERT_EQ(out.size(), 1u);
+      EXPECT_TRUE(sameBits(*out[0], *kept[k])) << "frame " << k;
+      if (k + 1 == frames.size())
+        first.push_back(out[0]); // outlives the stream below
+    }
+    EXPECT_TRUE(sameBits(*first[0], held_copy));
   }
 }
 

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <chrono>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -85,6 +87,35 @@ TemporalStream<PointT>::remember(std::size_t t, bool filtered)
 }
 
 template <typename PointT>
+void
+TemporalStream<PointT>::RecycleOutput::operator()(PointCloud* cloud) const
+{
+  std::unique_ptr<PointCloud> owned(cloud);
+  if (const std::shared_ptr<OutputPool> held = pool.lock()) {
+    std::lock_guard<std::mutex> lock(held->mutex);
+    if (held->spare.size() < 2)
+      held->spare.push_back(std::move(owned));
+  }
+}
+
+template <typename PointT>
+typename TemporalStream<PointT>::CloudPtr
+TemporalStream<PointT>::newOutput()
+{
+  std::unique_ptr<PointCloud> cloud;
+  {
+    std::lock_guard<std::mutex> lock(pool_->mutex);
+    if (!pool_->spare.empty()) {
+      cloud = std::move(pool_->spare.back());
+      pool_->spare.pop_back();
+    }
+  }
+  if (!cloud)
+    cloud.reset(new PointCloud);
+  return CloudPtr(cloud.release(), RecycleOutput{pool_});
+}
+
+template <typename PointT>
 typename TemporalStream<PointT>::CloudPtr
 TemporalStream<PointT>::filterAt(std::size_t t)
 {
@@ -120,7 +151,7 @@ TemporalStream<PointT>::filterAt(std::size_t t)
     current = t - lo;
   }
   const Viewpoint viewpoint{frame->sensor_origin_[0], frame->sensor_origin_[1], frame->sensor_origin_[2]};
-  CloudPtr out(new PointCloud);
+  CloudPtr out = newOutput();
   try {
     runFilter(grids, static_cast<int>(current), parameters_, viewpoint, {}, workspace_);
   } catch (const UnfilterableFrame& e) {

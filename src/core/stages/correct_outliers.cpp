@@ -14,7 +14,8 @@ detail::correctOutliersStage(const Grid& input, const NoiseProfile& profile, con
   if (profile.empty() || !sized)
     return &input;
   const std::vector<IsolatedPoint> found =
-      findIsolatedPoints(input, profile, parameters.outlier_sigmas, viewpoint, active, threads);
+      findIsolatedPoints(input, profile, parameters.outlier_sigmas, viewpoint, active, threads,
+                         workspace.range_scratch[0]);
   if (found.empty())
     return &input;
   copyGrid(input, workspace.corrected, threads);

@@ -22,7 +22,8 @@ struct FrameChanges
 };
 
 FrameChanges
-analyseNeighbours(const std::vector<const Grid*>& frames, int center, const Viewpoint& viewpoint, int threads)
+analyseNeighbours(const std::vector<const Grid*>& frames, int center, const Viewpoint& viewpoint, int threads,
+                  std::vector<float> (&scratch)[2])
 {
   const int count = static_cast<int>(frames.size());
   const Grid& current = *frames[center];
@@ -32,7 +33,7 @@ analyseNeighbours(const std::vector<const Grid*>& frames, int center, const View
   for (int k = 0; k < count; ++k) {
     if (k == center || frames[k]->countValid() == 0)
       continue;
-    c.changes[k] = analyseFrameChange(current, *frames[k], viewpoint, threads);
+    c.changes[k] = analyseFrameChange(current, *frames[k], viewpoint, threads, scratch[0], scratch[1]);
     c.still[k] = c.changes[k].change != FrameChange::motion;
     c.any_offset = c.any_offset || c.changes[k].change == FrameChange::offset;
   }
@@ -96,7 +97,7 @@ levelFrame(const Grid& from, const float* o, const std::vector<float>& mean, con
 bool
 levelFrames(const std::vector<const Grid*>& frames, int center, const FilterParameters& parameters,
             const Viewpoint& viewpoint, int threads, std::vector<Grid>& leveled, std::vector<const Grid*>& out,
-            std::vector<signed char>& moved, std::vector<FrameOffset>& changes)
+            std::vector<signed char>& moved, std::vector<FrameOffset>& changes, std::vector<float> (&scratch)[2])
 {
   const int count = static_cast<int>(frames.size());
   moved.clear();
@@ -110,7 +111,7 @@ levelFrames(const std::vector<const Grid*>& frames, int center, const FilterPara
       return false; // runContiguous reports it
   if (current.countValid() == 0)
     return false;
-  FrameChanges c = analyseNeighbours(frames, center, viewpoint, threads);
+  FrameChanges c = analyseNeighbours(frames, center, viewpoint, threads, scratch);
   // The motion test's answer for every frame of the run (an offset is levelled: not moved).
   moved.assign(count, -1);
   for (int k = 0; k < count; ++k)
@@ -143,7 +144,7 @@ detail::levelNeighbourFrames(const std::vector<const Grid*>& frames, int center,
 {
   std::vector<const Grid*> leveled;
   if (!levelFrames(frames, center, parameters, viewpoint, resolveThreads(parameters.threads), workspace.leveled,
-                   leveled, workspace.frames_moved, workspace.frame_changes))
+                   leveled, workspace.frames_moved, workspace.frame_changes, workspace.range_scratch))
     leveled = frames;
   return leveled;
 }

@@ -22,15 +22,17 @@ detail::profileMap(const FrameContext& ctx, const std::vector<float>& xs, const 
 const std::vector<float>&
 detail::gateInto(const FrameContext& ctx, float sigmas, const std::vector<float>& sig, std::vector<float>& gate)
 {
-  gate.clear();
-  if (sigmas > 0.0f) {
-    const std::size_t n = ctx.n;
-    const float scale = ctx.parameters.similarity_scale;
-    gate.resize(n);
-#pragma omp parallel for schedule(static) num_threads(ctx.threads)
-    for (std::size_t i = 0; i < n; ++i)
-      gate[i] = sigmas * sig[i] / scale;
+  if (!(sigmas > 0.0f)) {
+    gate.clear();
+    return gate;
   }
+  // (Every element is written below: resized, not cleared.)
+  const std::size_t n = ctx.n;
+  const float scale = ctx.parameters.similarity_scale;
+  gate.resize(n);
+#pragma omp parallel for schedule(static) num_threads(ctx.threads)
+  for (std::size_t i = 0; i < n; ++i)
+    gate[i] = sigmas * sig[i] / scale;
   return gate;
 }
 
