@@ -2,7 +2,8 @@
 # The camera-rate benchmark of the ROS nodelet: a real master, a nodelet manager with
 # range_nlm/TemporalFilterNodelet loaded, and a VGA bag (the frames of data/kinect-sequence,
 # looped) replayed at 30 Hz, each message stamped when it is sent. Prints, per mode (the live
-# preset static, recursive radius 1 with queue_size 2 and 1, the default static): output rate, latency
+# preset static and recursive radius 1, each with queue_size 1 (its default) and 2, the default
+# preset static): output rate, latency
 # from stamp to receipt (median, 95th percentile), frames dropped and how old the previous
 # output's frame is.
 #
@@ -73,11 +74,11 @@ run_mode() {
   kill -INT "$loader" 2>/dev/null || true
   wait "$loader" 2>/dev/null || true
 }
-# The node's default, the live preset: each frame alone, then its stream default (recursive,
-# radius 1), then the same with a queue of one frame (the newest frame only, the lowest latency).
+# The node's default, the live preset (queues of one frame, the newest): each frame alone, then its
+# stream default (recursive, radius 1); each also with queues of two frames.
 run_mode live_static _temporal_radius:=0
-run_mode live_static_queue1 _temporal_radius:=0 _queue_size:=1
+run_mode live_static_queue2 _temporal_radius:=0 _queue_size:=2
 run_mode live_recursive
-run_mode live_recursive_queue1 _queue_size:=1
+run_mode live_recursive_queue2 _queue_size:=2
 # The accuracy setting for recorded data, for comparison.
 run_mode default_static _preset:=default _temporal_radius:=0

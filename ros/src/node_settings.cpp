@@ -261,6 +261,9 @@ nodeSettingsFromParameters(const ros::NodeHandle& node)
   settings.stream = streamSettingsFromParameters(node);
   readParameter(node, "preset", settings.preset, "a string");
   readParameter(node, "input", settings.input, "a string");
+  // A live camera wants the newest frame: with one frame queued it waits behind the one being
+  // filtered only, not behind older ones too (docs/ros.md, "Camera rate").
+  settings.queue_size = settings.preset == "live" ? 1 : 2;
   readParameter(node, "queue_size", settings.queue_size, "an integer");
   readParameter(node, "image_transport", settings.image_transport, "a string");
   if (settings.input != "points" && settings.input != "depth")

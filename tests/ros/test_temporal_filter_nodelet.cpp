@@ -401,8 +401,9 @@ TEST(RosParameters, EveryRegistryParameterReachesTheFilterParameters)
   }
 }
 
-// Without ~preset a node runs the live preset, one frame of history in the recursive window; the
-// accuracy setting for recorded data filters each frame alone unless told otherwise.
+// Without ~preset a node runs the live preset, one frame of history in the recursive window, with
+// queues of one frame (the newest); the accuracy setting for recorded data filters each frame
+// alone with queues of two unless told otherwise.
 TEST(RosParameters, ANodeDefaultsToTheLivePresetInTheRecursiveWindow)
 {
   const range_nlm_ros::StreamSettings live =
@@ -410,13 +411,19 @@ TEST(RosParameters, ANodeDefaultsToTheLivePresetInTheRecursiveWindow)
   EXPECT_TRUE(test::sameOtherFields(*findParameter("threads"), live.parameters, FilterParameters::live()));
   EXPECT_EQ(live.temporal_radius, 1);
   EXPECT_EQ(live.window, TemporalWindow::recursive);
-  EXPECT_EQ(range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live")).preset, "live");
+  const range_nlm_ros::NodeSettings live_node = range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live"));
+  EXPECT_EQ(live_node.preset, "live");
+  EXPECT_EQ(live_node.queue_size, 1);
 
   ros::param::set("/rnlm_defaults_default/preset", std::string("default"));
   const range_nlm_ros::StreamSettings recorded =
       range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default"));
   EXPECT_TRUE(test::sameOtherFields(*findParameter("threads"), recorded.parameters, FilterParameters::recommended()));
   EXPECT_EQ(recorded.temporal_radius, 0);
+  EXPECT_EQ(range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default")).queue_size, 2);
+  ros::param::set("/rnlm_defaults_live/queue_size", 3);
+  EXPECT_EQ(range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live")).queue_size, 3);
+  ros::param::del("/rnlm_defaults_live/queue_size");
   ros::param::set("/rnlm_defaults_default/temporal_radius", 1);
   EXPECT_EQ(range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default")).window,
             TemporalWindow::causal);
@@ -883,7 +890,10 @@ TEST(RosLaunch, TheLaunchFileStartsTheNodeWithPrivateParametersAndTheCameraTopic
   EXPECT_FALSE(ros::param::has("/range_nlm/outlier_sigmas")); // nothing outside the node's namespace
 
   // The launch file's default for a live camera: the live preset, radius 1 in the recursive window,
-  // along the line of sight.
+  // along the line of sight, the newest frame only.
+  EXPECT_TRUE(waitFor([&] { return readLog(launch.log()).find("queue 1") != std::string::npos; }))
+      << readLog(launch.log());
+  EXPECT_NE(readLog(launch.log()).find("recursive window"), std::string::npos) << readLog(launch.log());
   FilterParameters p = testParameters();
   p.outlier_sigmas = 2.5f;
   p.displacement = Displacement::line_of_sight;

@@ -43,8 +43,8 @@ struct NodeSettings
   StreamSettings stream;
   /// "points" (sensor_msgs/PointCloud2) or "depth" (image + CameraInfo).
   std::string input = "points";
-  /// Subscriber and publisher queues (>= 1).
-  int queue_size = 2;
+  /// Subscriber and publisher queues (>= 1): 1 with the live preset (the newest frame only), else 2.
+  int queue_size = 1;
   /// image_transport of the depth input ("raw", "compressedDepth", ...).
   std::string image_transport = "raw";
   /// The preset the parameters start from (~preset; kDefaultPreset, "live", when not set).
