@@ -276,6 +276,12 @@ nodeSettingsFromParameters(const ros::NodeHandle& node)
   return settings;
 }
 
+int
+publisherQueue(const NodeSettings& settings)
+{
+  return std::max(settings.queue_size, 2);
+}
+
 std::vector<std::string>
 describeSettings(const NodeSettings& settings)
 {
@@ -292,7 +298,7 @@ describeSettings(const NodeSettings& settings)
        << windowName(settings.stream.window) << " window, points move along "
        << (along_ray ? "the line of sight" : "their normals")
        << (p.displacement == range_nlm::Displacement::automatic ? " (automatic)" : " (set)") << ", queue "
-       << settings.queue_size;
+       << settings.queue_size << " (published: " << publisherQueue(settings) << ")";
   std::ostringstream all;
   all << "parameters:";
   for (const range_nlm::ParameterEntry& entry : range_nlm::parameterRegistry()) {

@@ -64,7 +64,7 @@ void
 TemporalFilterNodelet::advertise()
 {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
-  const int queue = settings_.queue_size;
+  const int queue = publisherQueue(settings_);
   {
     std::lock_guard<std::mutex> lock(stream_mutex_);
     advertiseOptionalTopics();
@@ -90,7 +90,7 @@ void
 TemporalFilterNodelet::advertiseOptionalTopics()
 {
   ros::NodeHandle& private_node = getPrivateNodeHandle();
-  const int queue = settings_.queue_size;
+  const int queue = publisherQueue(settings_);
   const range_nlm::FilterParameters& parameters = settings_.stream.parameters;
   // Each published beside the filtered output while its feature is on and it has subscribers.
   const bool uncertainty = parameters.uncertainty;

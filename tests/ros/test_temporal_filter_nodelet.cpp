@@ -75,6 +75,7 @@ TEST(RosNode, PointCloud2CausalEqualsTheLibraryAndDropsBadMessages)
   ros::param::set("/rnlm_points/recursive", false); // the live preset's default window is recursive
   ros::param::set("/rnlm_points/search_window", 7);
   ros::param::set("/rnlm_points/patch", 3);
+  ros::param::set("/rnlm_points/queue_size", 10); // every message of a burst reaches the node
   ChildProcess node({nodeExecutable(), "__name:=rnlm_points", "~input:=/rnlm/in", "~output:=/rnlm/out"},
                     g_master->directory() + "/rnlm_points.log");
   ros::NodeHandle nh;
@@ -414,6 +415,7 @@ TEST(RosParameters, ANodeDefaultsToTheLivePresetInTheRecursiveWindow)
   const range_nlm_ros::NodeSettings live_node = range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live"));
   EXPECT_EQ(live_node.preset, "live");
   EXPECT_EQ(live_node.queue_size, 1);
+  EXPECT_EQ(range_nlm_ros::publisherQueue(live_node), 2); // a reader of one output keeps the next
 
   ros::param::set("/rnlm_defaults_default/preset", std::string("default"));
   const range_nlm_ros::StreamSettings recorded =
@@ -422,7 +424,9 @@ TEST(RosParameters, ANodeDefaultsToTheLivePresetInTheRecursiveWindow)
   EXPECT_EQ(recorded.temporal_radius, 0);
   EXPECT_EQ(range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default")).queue_size, 2);
   ros::param::set("/rnlm_defaults_live/queue_size", 3);
-  EXPECT_EQ(range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live")).queue_size, 3);
+  const range_nlm_ros::NodeSettings deeper = range_nlm_ros::nodeSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_live"));
+  EXPECT_EQ(deeper.queue_size, 3);
+  EXPECT_EQ(range_nlm_ros::publisherQueue(deeper), 3);
   ros::param::del("/rnlm_defaults_live/queue_size");
   ros::param::set("/rnlm_defaults_default/temporal_radius", 1);
   EXPECT_EQ(range_nlm_ros::streamSettingsFromParameters(ros::NodeHandle("/rnlm_defaults_default")).window,
@@ -577,6 +581,7 @@ TEST(RosNodelet, DepthImagesThroughANodeletManagerEqualTheLibrary)
   ros::param::set("/rnlm_depth/recursive", false);
   ros::param::set("/rnlm_depth/search_window", 7);
   ros::param::set("/rnlm_depth/patch", 3);
+  ros::param::set("/rnlm_depth/queue_size", 10); // every message of a burst reaches the node
   std::vector<std::string> manager_command = {RANGE_NLM_NODELET_EXECUTABLE, "manager", "__name:=rnlm_manager"};
 #ifdef RANGE_NLM_ASAN_RUNTIME
   // An AddressSanitizer build of the plugin loads only into a process whose first library is the

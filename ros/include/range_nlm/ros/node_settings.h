@@ -43,7 +43,8 @@ struct NodeSettings
   StreamSettings stream;
   /// "points" (sensor_msgs/PointCloud2) or "depth" (image + CameraInfo).
   std::string input = "points";
-  /// Subscriber and publisher queues (>= 1): 1 with the live preset (the newest frame only), else 2.
+  /// The subscriber queue (>= 1): 1 with the live preset (the newest frame only), else 2. The
+  /// publishers' queues hold at least two (publisherQueue).
   int queue_size = 1;
   /// image_transport of the depth input ("raw", "compressedDepth", ...).
   std::string image_transport = "raw";
@@ -68,6 +69,12 @@ nodeSettingsFromParameters(const ros::NodeHandle& private_node);
 /// sight or normal) and every parameter's value, the given ones marked "(set)".
 std::vector<std::string>
 describeSettings(const NodeSettings& settings);
+
+/// The queue of the node's publishers: queue_size, at least 2. A subscriber still reading a
+/// filtered frame (several megabytes over a socket) when the next is published then gets both;
+/// with one, the next would replace it and be lost while the node was keeping up.
+int
+publisherQueue(const NodeSettings& settings);
 
 /// The name of a temporal window: "causal", "centred" or "recursive".
 const char*
