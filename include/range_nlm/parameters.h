@@ -261,4 +261,9 @@ struct FilterParameters
   static FilterParameters preset(const std::string& name);
 };
 
+/// The number of threads FilterParameters::threads stands for: `threads` if > 0, else OpenMP's
+/// default (1 in a build without OpenMP).
+int
+threadCount(int threads);
+
 } // namespace range_nlm

@@ -7,10 +7,6 @@
 
 #include <sensor_msgs/image_encodings.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -88,22 +84,11 @@ writeCoordinate(std::uint8_t* point, const Coordinate& c, float value)
   }
 }
 
-/// `threads` if > 0, else OpenMP's default (1 without OpenMP).
-int
-resolvedThreads(int threads)
-{
-#ifdef _OPENMP
-  return threads > 0 ? threads : omp_get_max_threads();
-#else
-  return threads > 0 ? threads : 1;
-#endif
-}
-
 /// The threads of `parameters` (FilterParameters::threads), else OpenMP's default.
 int
 threadsOf(const range_nlm::FilterParameters* parameters)
 {
-  return resolvedThreads(parameters ? parameters->threads : 0);
+  return range_nlm::threadCount(parameters ? parameters->threads : 0);
 }
 
 /// The smallest side of a frame any parameters can filter: the smallest normal window.
@@ -255,7 +240,7 @@ pointCloud2WithXyz(const sensor_msgs::PointCloud2& message, const Cloud& xyz, in
   const std::size_t width = message.width, row_bytes = message.row_step;
   unsigned dense = 1;
   (void)threads;
-#pragma omp parallel for schedule(static) reduction(& : dense) num_threads(resolvedThreads(threads))
+#pragma omp parallel for schedule(static) reduction(& : dense) num_threads(range_nlm::threadCount(threads))
   for (std::ptrdiff_t v = 0; v < rows; ++v) {
     std::uint8_t* row = out->data.data() + static_cast<std::size_t>(v) * row_bytes;
     std::memcpy(row, message.data.data() + static_cast<std::size_t>(v) * row_bytes, row_bytes);

@@ -42,6 +42,12 @@ resolveThreads(int threads)
 }
 } // namespace detail
 
+int
+threadCount(int threads)
+{
+  return detail::resolveThreads(threads);
+}
+
 void
 computeOffsets(const Grid& center, const NormalField& normals, const std::vector<FrameTerm>& frames,
                int search_window, int patch_size, Evaluation evaluation, int threads,

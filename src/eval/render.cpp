@@ -14,10 +14,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 namespace range_nlm
 {
 
@@ -31,17 +27,6 @@ numberText(double value)
   s.precision(8);
   s << value;
   return s.str();
-}
-
-int
-threadCount(int threads)
-{
-#ifdef _OPENMP
-  return threads > 0 ? threads : omp_get_max_threads();
-#else
-  (void)threads;
-  return 1;
-#endif
 }
 
 void

@@ -13,25 +13,8 @@
 #include <utility>
 #include <vector>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 namespace range_nlm
 {
-namespace detail
-{
-/// `threads` if > 0, else OpenMP's default (1 without OpenMP).
-inline int
-streamThreads(int threads)
-{
-#ifdef _OPENMP
-  return threads > 0 ? threads : omp_get_max_threads();
-#else
-  return threads > 0 ? threads : 1;
-#endif
-}
-} // namespace detail
 
 template <typename PointT>
 TemporalStream<PointT>::TemporalStream(int radius, TemporalWindow window, const FilterParameters& parameters)
@@ -204,7 +187,7 @@ TemporalStream<PointT>::push(const CloudConstPtr& frame, bool wanted)
     // The first infinite coordinate in row order, whichever thread meets it.
     const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(frame->points.size());
     std::ptrdiff_t infinite = n;
-#pragma omp parallel for schedule(static) reduction(min : infinite) num_threads(detail::streamThreads(parameters_.threads))
+#pragma omp parallel for schedule(static) reduction(min : infinite) num_threads(threadCount(parameters_.threads))
     for (std::ptrdiff_t i = 0; i < n; ++i) {
       const PointT& p = frame->points[i];
       if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
