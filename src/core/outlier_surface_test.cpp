@@ -11,26 +11,39 @@ namespace range_nlm
 {
 
 float
-detail::medianRayAngle(const Grid& grid, const std::vector<float>& rho)
+detail::medianRayAngle(const Grid& grid, const std::vector<float>& rho, int threads)
 {
   // A step along the ray of a few pixel footprints is geometry (an edge of a face seen at a
   // grazing angle, a curved silhouette), not an outlier, however small the noise: without this
   // floor a noise-free frame would have its silhouettes taken for outliers.
   const int width = grid.width, height = grid.height;
+  // The rows' angles gathered by the threads side by side: the median of the gathered values does
+  // not depend on the order they are gathered in.
   std::vector<float> angles;
-  for (int v = 0; v + 1 < height; v += 8)
-    for (int u = 0; u + 1 < width; u += 4) {
-      const std::size_t i = static_cast<std::size_t>(v) * width + u;
-      if (!(rho[i] > 0.0f))
-        continue;
-      for (const std::size_t j : {i + 1, i + static_cast<std::size_t>(width)})
-        if (rho[j] > 0.0f) {
-          const float dx = grid.x[j] - grid.x[i], dy = grid.y[j] - grid.y[i], dz = grid.z[j] - grid.z[i];
-          const float angle = std::sqrt(dx * dx + dy * dy + dz * dz) / rho[i];
-          if (angle < std::numeric_limits<float>::infinity())
-            angles.push_back(angle);
-        }
+  const int rows = height > 1 ? (height - 2) / 8 + 1 : 0;
+  (void)threads;
+#pragma omp parallel num_threads(resolveThreads(threads))
+  {
+    std::vector<float> mine;
+#pragma omp for schedule(static) nowait
+    for (int row = 0; row < rows; ++row) {
+      const int v = 8 * row;
+      for (int u = 0; u + 1 < width; u += 4) {
+        const std::size_t i = static_cast<std::size_t>(v) * width + u;
+        if (!(rho[i] > 0.0f))
+          continue;
+        for (const std::size_t j : {i + 1, i + static_cast<std::size_t>(width)})
+          if (rho[j] > 0.0f) {
+            const float dx = grid.x[j] - grid.x[i], dy = grid.y[j] - grid.y[i], dz = grid.z[j] - grid.z[i];
+            const float angle = std::sqrt(dx * dx + dy * dy + dz * dz) / rho[i];
+            if (angle < std::numeric_limits<float>::infinity())
+              mine.push_back(angle);
+          }
+      }
     }
+#pragma omp critical(range_nlm_ray_angles)
+    angles.insert(angles.end(), mine.begin(), mine.end());
+  }
   if (angles.empty())
     return 0.0f;
   std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());

@@ -64,7 +64,7 @@ detail::findIsolatedPoints(const Grid& grid, const NoiseProfile& profile, float 
 #pragma omp parallel for simd schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i)
     r[i] = r[i] < std::numeric_limits<float>::infinity() ? r[i] : 0.0f;
-  const OutlierFrame frame{rho, width, height, sigmas, profile, medianRayAngle(grid, rho)};
+  const OutlierFrame frame{rho, width, height, sigmas, profile, medianRayAngle(grid, rho, threads)};
   return voteSides(frame, findOutlierCandidates(grid, frame, active, threads));
 }
 

@@ -44,9 +44,9 @@ struct OutlierFrame
 
 /// The angle between adjacent rays: the median of |p_i - p_j| / rho_i over adjacent valid pixels
 /// at every 4th column of every 8th row (on a surface facing the sensor, the pixel's angular
-/// size); 0 if there is none.
+/// size); 0 if there is none. By `threads` threads, with the same result.
 float
-medianRayAngle(const Grid& grid, const std::vector<float>& rho);
+medianRayAngle(const Grid& grid, const std::vector<float>& rho, int threads);
 
 /// Whether point (a, b) lies on a surface: it agrees with two valid 8-neighbours other than pixel
 /// (skip_a, skip_b), or with one that agrees in turn with one of its own neighbours other than

@@ -292,7 +292,7 @@ runMultiscale(const std::vector<const Grid*>& frames, int center, const FilterPa
     return;
   }
   rangesOf(input, viewpoint, threads, workspace.ranges);
-  const SurfaceTolerance tolerance{profile, medianRayAngle(input, workspace.ranges)};
+  const SurfaceTolerance tolerance{profile, medianRayAngle(input, workspace.ranges, threads)};
   std::vector<Grid>& reduced = workspace.pyramid;
   reduced.resize(frames.size());
   std::vector<const Grid*> coarse_frames(frames.size());
