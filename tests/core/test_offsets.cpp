@@ -111,7 +111,9 @@ TEST(Kernel, FastMatchesDirectOnAWideFrameWithPerPointBandwidths)
 
 // A frame searched over a smaller window (FrameTerm::search_window, a stream's history) gives the
 // literal rule in every build: its sums scaled by the centre frame's weight over the whole window
-// relative to the inner one, with holes, per-point bandwidths, the patch gate and the spread.
+// relative to the inner one, with holes, per-point bandwidths, the patch gate and the spread. The
+// centre frame's rows through the inner window are summed as whole rows where a row is one block
+// (search 7 and 9, patches up to 5), their weights split between the two windows.
 TEST(Kernel, FramesWithASmallerSearchWindowMatchDirectInEveryBuild)
 {
   const Viewpoint origin{0, 0, 0};
@@ -127,7 +129,7 @@ TEST(Kernel, FramesWithASmallerSearchWindowMatchDirectInEveryBuild)
     }
     FrameTerm centre{&b, 0.0f, 0.004f, 1.0f};
     centre.inverse_distance2 = &inv_d2;
-    for (int search : {5, 9})
+    for (int search : {5, 7, 9}) // (7 and 9: the centre frame's rows summed whole, their weights split)
       for (int inner : {1, 3, 5})
         for (int patch : {1, 3, 5, 13}) {
           if (inner > search)
