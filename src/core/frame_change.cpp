@@ -145,27 +145,6 @@ struct ChangeBlocks
 /// along a row or a column.
 constexpr int kShifts[9][2] = {{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}, {2, 0}, {-2, 0}, {0, 2}, {0, -2}};
 
-/// The range |p - viewpoint| of every point of `a` into `rho_a` and of `b` into `rho_b` (0 for
-/// invalid points).
-void
-rangesOfBoth(const Grid& a, const Grid& b, const Viewpoint& viewpoint, int threads, std::vector<float>& rho_a,
-             std::vector<float>& rho_b)
-{
-  const std::size_t n = a.size();
-  rho_a.resize(n);
-  rho_b.resize(n);
-  (void)threads;
-#pragma omp parallel for schedule(static) num_threads(detail::resolveThreads(threads))
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto range = [&](const Grid& g) {
-      const float dx = g.x[i] - viewpoint[0], dy = g.y[i] - viewpoint[1], dz = g.z[i] - viewpoint[2];
-      return std::sqrt(dx * dx + dy * dy + dz * dz);
-    };
-    rho_a[i] = a.valid[i] ? range(a) : 0.0f;
-    rho_b[i] = b.valid[i] ? range(b) : 0.0f;
-  }
-}
-
 /// The differences of block t against `b` shifted by kShifts[s] into `diff`, every `step`-th
 /// pixel along rows and columns; false if fewer than half of those are valid in both.
 bool
@@ -416,7 +395,8 @@ detail::analyseFrameChange(const Grid& a, const Grid& b, const Viewpoint& viewpo
   if (a.size() != b.size() || a.width <= 0 || a.height <= 0)
     return result;
   const int width = a.width, height = a.height;
-  rangesOfBoth(a, b, viewpoint, threads, rho_a, rho_b);
+  detail::rangesOf(a, viewpoint, detail::resolveThreads(threads), rho_a);
+  detail::rangesOf(b, viewpoint, detail::resolveThreads(threads), rho_b);
   // The blocks of framesMoved. Per block: the median difference and its spread, and whether the
   // block is structured and shows a shift (see the header).
   const int block = std::max(tuned::kMotionMinBlockSize, width / tuned::kMotionBlocksAcross);

@@ -13,22 +13,50 @@ namespace range_nlm
 
 namespace
 {
-/// Pixel i's history starts over from start's point (counted as `started` frames) where start has
-/// one, else from the frame's (counted as 1); it is empty where the frame has no point.
-void
-startOver(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started, std::size_t i)
+/// Pixel i's history starts over (at(i)) from start's point (counted as `started` frames) where
+/// start has one, else from the frame's (counted as 1); it is empty where the frame has no point.
+/// The history's arrays must have the frame's size. Branch-free, so that a loop of it vectorizes.
+struct StartOver
 {
-  Grid& h = history.average;
-  const bool from_start = start && frame.valid[i] && start->valid[i];
-  const Grid& from = from_start ? *start : frame;
-  h.x[i] = from.x[i];
-  h.y[i] = from.y[i];
-  h.z[i] = from.z[i];
-  h.valid[i] = frame.valid[i];
-  history.count[i] = from_start ? started : frame.valid[i] ? 1 : 0;
-}
+  StartOver(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started)
+      : hx(history.average.x.data()), hy(history.average.y.data()), hz(history.average.z.data()),
+        hv(history.average.valid.data()), count(history.count.data()), fx(frame.x.data()), fy(frame.y.data()),
+        fz(frame.z.data()), fv(frame.valid.data()), has_start(start != nullptr),
+        // (Without a start the frame stands in for it, never chosen.)
+        sx(start ? start->x.data() : fx), sy(start ? start->y.data() : fy), sz(start ? start->z.data() : fz),
+        sv(start ? start->valid.data() : fv), started(started)
+  {
+  }
 
-/// Every pixel's history starts over: startOver at every pixel, branch-free so that it vectorizes.
+  void at(std::ptrdiff_t i) const
+  {
+    const bool valid = fv[i] != 0;
+    const bool from_start = has_start && valid && sv[i] != 0;
+    hx[i] = from_start ? sx[i] : fx[i];
+    hy[i] = from_start ? sy[i] : fy[i];
+    hz[i] = from_start ? sz[i] : fz[i];
+    hv[i] = fv[i];
+    count[i] = from_start ? started : static_cast<std::uint16_t>(valid ? 1 : 0);
+  }
+
+  float* __restrict hx;
+  float* __restrict hy;
+  float* __restrict hz;
+  unsigned char* __restrict hv;
+  std::uint16_t* __restrict count;
+  const float* __restrict fx;
+  const float* __restrict fy;
+  const float* __restrict fz;
+  const unsigned char* __restrict fv;
+  bool has_start;
+  const float* __restrict sx;
+  const float* __restrict sy;
+  const float* __restrict sz;
+  const unsigned char* __restrict sv;
+  std::uint16_t started;
+};
+
+/// Every pixel's history starts over.
 void
 restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint16_t started, int threads)
 {
@@ -41,32 +69,12 @@ restart(RunningAverage& history, const Grid& frame, const Grid* start, std::uint
   h.z.resize(n);
   h.valid.resize(n);
   history.count.resize(n);
-  float* __restrict hx = h.x.data();
-  float* __restrict hy = h.y.data();
-  float* __restrict hz = h.z.data();
-  unsigned char* __restrict hv = h.valid.data();
-  std::uint16_t* __restrict count = history.count.data();
-  const float* __restrict fx = frame.x.data();
-  const float* __restrict fy = frame.y.data();
-  const float* __restrict fz = frame.z.data();
-  const unsigned char* __restrict fv = frame.valid.data();
-  // Without a start, the frame stands in for it with no pixel of its own.
-  const bool has_start = start != nullptr;
-  const float* __restrict sx = has_start ? start->x.data() : fx;
-  const float* __restrict sy = has_start ? start->y.data() : fy;
-  const float* __restrict sz = has_start ? start->z.data() : fz;
-  const unsigned char* __restrict sv = has_start ? start->valid.data() : fv;
+  const StartOver over(history, frame, start, started);
   const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for simd schedule(static) num_threads(threads)
-  for (std::ptrdiff_t i = 0; i < size; ++i) {
-    const bool valid = fv[i] != 0;
-    const bool from_start = has_start && valid && sv[i] != 0;
-    hx[i] = from_start ? sx[i] : fx[i];
-    hy[i] = from_start ? sy[i] : fy[i];
-    hz[i] = from_start ? sz[i] : fz[i];
-    hv[i] = fv[i];
-    count[i] = from_start ? started : static_cast<std::uint16_t>(valid ? 1 : 0);
-  }
+  // (A copy per thread, whose pointers the compiler keeps in registers.)
+#pragma omp parallel for simd schedule(static) num_threads(threads) firstprivate(over)
+  for (std::ptrdiff_t i = 0; i < size; ++i)
+    over.at(i);
 }
 
 } // namespace
@@ -145,10 +153,11 @@ updateRunningAverage(RunningAverage& history, const Grid& frame, const Grid* sta
   detail::markChangedPixels(along, frame.width, frame.height, noise.data(), tuned::kHistoryChangeSigmas * ratio,
                             threads, changed);
   Grid& h = history.average;
+  const StartOver over(history, frame, start, started);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < size; ++i) {
     if (!frame.valid[i] || !h.valid[i] || history.count[i] == 0 || changed[i] || !(rho_f[i] > 0.0f)) {
-      startOver(history, frame, start, started, static_cast<std::size_t>(i));
+      over.at(i);
       continue;
     }
     const int count = std::min(static_cast<int>(history.count[i]) + 1, max_count);

@@ -231,8 +231,7 @@ checkCoordinateScale(const Grid& frame)
   const float* __restrict y = frame.y.data();
   const float* __restrict z = frame.z.data();
   const unsigned char* __restrict valid = frame.valid.data();
-  // (A maximum does not depend on the order: the same value with any number of threads.)
-#pragma omp parallel for simd schedule(static) reduction(max : largest) if (n >= (1 << 16))
+#pragma omp simd reduction(max : largest)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const float m = std::max(std::max(std::fabs(x[i]), std::fabs(y[i])), std::fabs(z[i]));
     largest = std::max(largest, valid[i] ? m : -1.0f);
