@@ -84,13 +84,6 @@ writeCoordinate(std::uint8_t* point, const Coordinate& c, float value)
   }
 }
 
-/// The threads of `parameters` (FilterParameters::threads), else OpenMP's default.
-int
-threadsOf(const range_nlm::FilterParameters* parameters)
-{
-  return range_nlm::threadCount(parameters ? parameters->threads : 0);
-}
-
 /// The smallest side of a frame any parameters can filter: the smallest normal window.
 int
 smallestWindow()
@@ -192,9 +185,10 @@ cloudFromPointCloud2(const sensor_msgs::PointCloud2& message, const range_nlm::F
   // pixel in row order, whichever thread met it (the cloud is then dropped whole).
   const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(cloud->size());
   std::ptrdiff_t bad = n;
+  const int threads = range_nlm::threadCount(parameters ? parameters->threads : 0);
   unsigned dense = 1;
-  (void)parameters;
-#pragma omp parallel for schedule(static) reduction(min : bad) reduction(& : dense) num_threads(threadsOf(parameters))
+  (void)threads;
+#pragma omp parallel for schedule(static) reduction(min : bad) reduction(& : dense) num_threads(threads)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const std::uint8_t* p = &message.data[static_cast<std::size_t>(i) * message.point_step];
     const double x = readCoordinate(p, layout.x), y = readCoordinate(p, layout.y), z = readCoordinate(p, layout.z);
