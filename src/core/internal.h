@@ -57,6 +57,14 @@ computeOffsets(const Grid& center, const NormalField& normals, const std::vector
 void
 interpolateProfile(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                    std::size_t n, const std::vector<float>* ys2 = nullptr, float* out2 = nullptr);
+/// The builds of interpolateProfile this CPU runs (baseline, then AVX2, then AVX-512; for tests),
+/// and interpolateProfile with build `build` (< interpolateProfileBuilds()).
+std::size_t
+interpolateProfileBuilds();
+void
+interpolateProfileWithBuild(std::size_t build, const std::vector<float>& xs, const std::vector<float>& ys,
+                            const float* x, float* out, std::size_t n, const std::vector<float>* ys2 = nullptr,
+                            float* out2 = nullptr);
 /// interpolateProfile by `threads` threads, in blocks of points (the same result: each point's
 /// value depends on that point alone).
 void

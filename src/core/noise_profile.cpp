@@ -2,6 +2,7 @@
 // the window extent of sampled windows, binned by range, and their interpolation at any range.
 #include "internal.h"
 #include "robust_statistics.h"
+#include "simd/kernels.h"
 #include "tuned.h"
 
 #include <pcl/common/eigen.h>
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <utility>
 
 namespace range_nlm
 {
@@ -32,8 +34,10 @@ interpolate(const std::vector<float>& xs, const std::vector<float>& ys, float x)
 }
 
 /// detail::interpolateProfile, with the second profile (ys2, out2) if Second (then both non-null).
+/// Compiled once per instruction set below (the same operations, this file being compiled without
+/// contraction into fused multiply-adds, so every build gives the same bits).
 template <bool Second>
-void
+[[gnu::always_inline]] inline void
 interpolateProfiles(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                     std::size_t n, const std::vector<float>* ys2, float* out2)
 {
@@ -86,6 +90,57 @@ interpolateProfiles(const std::vector<float>& xs, const std::vector<float>& ys, 
     if (Second)
       finish(zs, zl, zh, out2 + i0);
   }
+}
+
+using InterpolateBuild = void (*)(const std::vector<float>&, const std::vector<float>&, const float*, float*,
+                                  std::size_t, const std::vector<float>*, float*);
+
+template <bool Second>
+void
+interpolateBaseline(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                    std::size_t n, const std::vector<float>* ys2, float* out2)
+{
+  interpolateProfiles<Second>(xs, ys, x, out, n, ys2, out2);
+}
+
+#if defined(__x86_64__)
+template <bool Second>
+[[gnu::target("avx2")]] void
+interpolateAvx2(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                std::size_t n, const std::vector<float>* ys2, float* out2)
+{
+  interpolateProfiles<Second>(xs, ys, x, out, n, ys2, out2);
+}
+
+template <bool Second>
+[[gnu::target("avx512f,avx512vl,avx512dq,avx512bw,prefer-vector-width=512")]] void
+interpolateAvx512(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
+                  std::size_t n, const std::vector<float>* ys2, float* out2)
+{
+  interpolateProfiles<Second>(xs, ys, x, out, n, ys2, out2);
+}
+#endif
+
+/// The builds of the interpolation (one profile, two profiles) this CPU runs, slowest first.
+std::vector<std::pair<InterpolateBuild, InterpolateBuild>>
+interpolateBuilds()
+{
+  std::vector<std::pair<InterpolateBuild, InterpolateBuild>> all{{&interpolateBaseline<false>, &interpolateBaseline<true>}};
+#if defined(__x86_64__)
+  if (detail::cpuRunsAvx2())
+    all.emplace_back(&interpolateAvx2<false>, &interpolateAvx2<true>);
+  if (detail::cpuRunsAvx512())
+    all.emplace_back(&interpolateAvx512<false>, &interpolateAvx512<true>);
+#endif
+  return all;
+}
+
+/// The fastest build: the one-profile form, or the two-profile form if `second`.
+InterpolateBuild
+fastestInterpolate(bool second)
+{
+  static const std::pair<InterpolateBuild, InterpolateBuild> fastest = interpolateBuilds().back();
+  return second ? fastest.second : fastest.first;
 }
 
 /// `samples` pixels of an n-pixel frame drawn with replacement from those for which eligible(i)
@@ -200,9 +255,31 @@ detail::interpolateProfile(const std::vector<float>& xs, const std::vector<float
     return;
   }
   if (second)
-    interpolateProfiles<true>(xs, ys, x, out, n, ys2, out2);
+    fastestInterpolate(true)(xs, ys, x, out, n, ys2, out2);
   else
-    interpolateProfiles<false>(xs, ys, x, out, n, nullptr, nullptr);
+    fastestInterpolate(false)(xs, ys, x, out, n, nullptr, nullptr);
+}
+
+std::size_t
+detail::interpolateProfileBuilds()
+{
+  return interpolateBuilds().size();
+}
+
+void
+detail::interpolateProfileWithBuild(std::size_t build, const std::vector<float>& xs, const std::vector<float>& ys,
+                                    const float* x, float* out, std::size_t n, const std::vector<float>* ys2,
+                                    float* out2)
+{
+  const auto chosen = interpolateBuilds().at(build);
+  if (xs.empty()) {
+    interpolateProfile(xs, ys, x, out, n, ys2, out2);
+    return;
+  }
+  if (ys2 && out2)
+    chosen.second(xs, ys, x, out, n, ys2, out2);
+  else
+    chosen.first(xs, ys, x, out, n, nullptr, nullptr);
 }
 
 void

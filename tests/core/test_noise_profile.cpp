@@ -15,7 +15,8 @@ using namespace range_nlm::test;
 // The vectorized interpolation of the noise profile behind the per-point maps gives the bits of
 // sigmaAt / extentAt at every range: below, above and on the bin centres, between them, at 0
 // (invalid points), for profiles of 1 to 9 bins (ranges made strictly increasing, as
-// estimateNoiseProfile leaves them), and for any count of points (blocks and their tails).
+// estimateNoiseProfile leaves them), and for any count of points (blocks and their tails); in
+// every instruction-set build this CPU runs, with one profile and with two in the same scan.
 TEST(NoiseProfile, VectorizedInterpolationIsTheScalarOne)
 {
   std::mt19937_64 rng(5);
@@ -41,15 +42,24 @@ TEST(NoiseProfile, VectorizedInterpolationIsTheScalarOne)
         at.push_back(std::nextafter(r, 0.0f));
         at.push_back(std::nextafter(r, 1e30f));
       }
-      std::vector<float> sigma(at.size(), -1.0f), extent(at.size(), -1.0f);
-      detail::interpolateProfile(profile.range, profile.sigma, at.data(), sigma.data(), at.size());
-      detail::interpolateProfile(profile.range, profile.extent, at.data(), extent.data(), at.size());
-      for (std::size_t i = 0; i < at.size(); ++i) {
-        const float s = profile.sigmaAt(at[i]), e = profile.extentAt(at[i]);
-        EXPECT_EQ(std::memcmp(&sigma[i], &s, sizeof(float)), 0)
-            << "bins " << bins << " trial " << trial << " rho " << at[i] << ": " << sigma[i] << " vs " << s;
-        EXPECT_EQ(std::memcmp(&extent[i], &e, sizeof(float)), 0)
-            << "bins " << bins << " trial " << trial << " rho " << at[i] << ": " << extent[i] << " vs " << e;
+      for (std::size_t build = 0; build < detail::interpolateProfileBuilds(); ++build) {
+        std::vector<float> sigma(at.size(), -1.0f), extent(at.size(), -1.0f);
+        std::vector<float> sigma2(at.size(), -1.0f), extent2(at.size(), -1.0f);
+        detail::interpolateProfileWithBuild(build, profile.range, profile.sigma, at.data(), sigma.data(), at.size());
+        detail::interpolateProfileWithBuild(build, profile.range, profile.extent, at.data(), extent.data(), at.size());
+        detail::interpolateProfileWithBuild(build, profile.range, profile.sigma, at.data(), sigma2.data(), at.size(),
+                                            &profile.extent, extent2.data());
+        for (std::size_t i = 0; i < at.size(); ++i) {
+          const float s = profile.sigmaAt(at[i]), e = profile.extentAt(at[i]);
+          EXPECT_EQ(std::memcmp(&sigma[i], &s, sizeof(float)), 0) << "build " << build << " bins " << bins << " trial "
+                                                                  << trial << " rho " << at[i] << ": " << sigma[i]
+                                                                  << " vs " << s;
+          EXPECT_EQ(std::memcmp(&extent[i], &e, sizeof(float)), 0) << "build " << build << " bins " << bins << " trial "
+                                                                   << trial << " rho " << at[i] << ": " << extent[i]
+                                                                   << " vs " << e;
+          EXPECT_EQ(std::memcmp(&sigma2[i], &s, sizeof(float)), 0) << "build " << build << " (two profiles)";
+          EXPECT_EQ(std::memcmp(&extent2[i], &e, sizeof(float)), 0) << "build " << build << " (two profiles)";
+        }
       }
     }
 }

@@ -18,6 +18,16 @@ namespace detail
 namespace
 {
 
+/// Every K-th of w values from `from` into `to` (K a constant, so that the strided reads
+/// vectorize as shuffles).
+template <int K, typename T>
+void
+everyKth(const T* __restrict from, int w, T* __restrict to)
+{
+  for (int a = 0; a < w; ++a)
+    to[a] = from[a * K];
+}
+
 /// The pixels (u0 + a k, v0 + b k) of a grid-sized array as an array of their own.
 template <typename T>
 void
@@ -27,9 +37,17 @@ subsample(const std::vector<T>& from, int width, int height, int k, int u0, int 
   to.resize(static_cast<std::size_t>(w) * h);
   (void)threads;
 #pragma omp parallel for schedule(static) num_threads(threads)
-  for (int b = 0; b < h; ++b)
-    for (int a = 0; a < w; ++a)
-      to[static_cast<std::size_t>(b) * w + a] = from[static_cast<std::size_t>(v0 + b * k) * width + u0 + a * k];
+  for (int b = 0; b < h; ++b) {
+    const T* row = from.data() + static_cast<std::size_t>(v0 + b * k) * width + u0;
+    T* out = to.data() + static_cast<std::size_t>(b) * w;
+    if (k == 2)
+      everyKth<2>(row, w, out);
+    else if (k == 4)
+      everyKth<4>(row, w, out);
+    else
+      for (int a = 0; a < w; ++a)
+        out[a] = row[static_cast<std::size_t>(a) * k];
+  }
 }
 
 void
