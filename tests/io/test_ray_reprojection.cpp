@@ -7,9 +7,12 @@
 #include <range_nlm/io/ray_reprojection.h>
 #include <range_nlm/nonlocal_means_filter.h>
 
+#include "io/ray_reprojection_builds.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -256,4 +259,60 @@ TEST(RayReprojection, BadInputIsRefusedWithItsName)
   p.range_gate = std::numeric_limits<double>::quiet_NaN();
   EXPECT_NE(test::errorOf([&] { reprojectOntoRays(a, a, p); }).find("range_gate"), std::string::npos);
   EXPECT_NE(test::errorOf([&] { cloudToDepthImage(a, a, 0.0); }).find("depth_scale"), std::string::npos);
+}
+
+// The windows' planes summed a row's pixels at a time, in every instruction-set build this CPU
+// runs, give the bits of the pixel-by-pixel reference (and its counts): on frames whose widths
+// are no multiple of the lanes, with holes, a depth step and a crease, points filtered by the
+// default and moved by hand in every direction, for the narrowest, the default and a wide window.
+TEST(RayReprojection, EveryBuildGivesTheReferenceBits)
+{
+  ASSERT_GE(detail::rayReprojectionBuilds(), 2u);
+  struct Scene
+  {
+    int width, height;
+    test::DepthFunction depth;
+  };
+  const Scene scenes[] = {{61, 37, test::step(30, 0.9, 1.6)}, {kWidth, kHeight, test::crease(40, 1.1, 0.7)},
+                          {9, 13, test::plane(kTiltedNormal, kTiltedOffset)}};
+  NonLocalMeansFilter<pcl::PointXYZ> filter;
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (const Scene& scene : scenes) {
+    Cloud input = test::makeCloud(scene.width, scene.height, scene.depth, 0.004, 5);
+    test::punchHoles(input, 0.08, 6);
+    filter.setInputCloud(Cloud::ConstPtr(new Cloud(input)));
+    Cloud filtered;
+    filter.filter(filtered);
+    // Some points moved by hand as well, and one left where it was.
+    for (std::size_t i = 0; i < filtered.size(); i += 7)
+      if (std::isfinite(filtered[i].z)) {
+        filtered[i].x += 0.002f * unit(rng), filtered[i].y += 0.002f * unit(rng), filtered[i].z += 0.002f * unit(rng);
+      }
+    filtered[filtered.size() / 2] = input[filtered.size() / 2];
+    for (int window : {3, 5, 9}) {
+      RayReprojectionParameters parameters;
+      parameters.window = window;
+      RayReprojectionCounts reference_counts;
+      const Cloud reference = detail::reprojectOntoRaysWithBuild(0, input, filtered, parameters, &reference_counts);
+      EXPECT_GT(reference_counts.on_plane, filtered.size() / 2);
+      const std::vector<Eigen::Vector3d> planes = detail::surfacePlaneNormalsWithBuild(0, filtered, parameters);
+      for (std::size_t build = 1; build < detail::rayReprojectionBuilds(); ++build) {
+        const std::vector<Eigen::Vector3d> normals = detail::surfacePlaneNormalsWithBuild(build, filtered, parameters);
+        ASSERT_EQ(normals.size(), planes.size());
+        for (std::size_t i = 0; i < planes.size(); ++i)
+          ASSERT_EQ(std::memcmp(normals[i].data(), planes[i].data(), sizeof(double) * 3), 0)
+              << scene.width << " x " << scene.height << ", window " << window << ", build " << build << ", pixel "
+              << i << ": " << normals[i].transpose() << " against " << planes[i].transpose();
+        RayReprojectionCounts counts;
+        const Cloud out = detail::reprojectOntoRaysWithBuild(build, input, filtered, parameters, &counts);
+        ASSERT_EQ(out.size(), reference.size());
+        EXPECT_EQ(std::memcmp(out.points.data(), reference.points.data(), out.size() * sizeof(pcl::PointXYZ)), 0)
+            << scene.width << " x " << scene.height << ", window " << window << ", build " << build;
+        EXPECT_EQ(counts.on_plane, reference_counts.on_plane);
+        EXPECT_EQ(counts.grazing, reference_counts.grazing);
+        EXPECT_EQ(counts.unmoved, reference_counts.unmoved);
+      }
+    }
+  }
 }
