@@ -6,10 +6,20 @@
 //       it is sent, as a camera driver does; receives OUTPUT and prints one line of figures:
 //       output rate, latency from stamp to receipt (median, 95th percentile), frames dropped and
 //       the median age of the previous output's frame.
+//   range_nlm_ros_camera_rate play-depth BAG INPUT OUTPUT SECONDS [RATE_HZ]
+//       the same with the clouds' z as 16UC1 depth images (millimetres) on INPUT, each with a
+//       CameraInfo on the sibling camera_info topic (the Kinect's intrinsics: f = 525 px, principal
+//       point (320, 240)), as a depth camera's driver publishes them; OUTPUT is a depth image.
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include <algorithm>
 #include <cstdio>
@@ -17,6 +27,7 @@
 #include <stdexcept>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace
@@ -80,20 +91,80 @@ report(Receipts& r, double warmup_end, std::size_t sent_after_warmup, double sec
               quantile(gaps, 0.5));
 }
 
+/// The z of an organized PointCloud2 with FLOAT32 x, y, z as a 16UC1 depth image (millimetres, 0
+/// where z is NaN or out of range), and the CameraInfo of the Kinect's intrinsics for it.
+std::pair<sensor_msgs::Image, sensor_msgs::CameraInfo>
+depthImageOf(const sensor_msgs::PointCloud2& cloud)
+{
+  int z_offset = -1;
+  for (const sensor_msgs::PointField& f : cloud.fields)
+    if (f.name == "z" && f.datatype == sensor_msgs::PointField::FLOAT32)
+      z_offset = static_cast<int>(f.offset);
+  if (z_offset < 0)
+    throw std::runtime_error("the bag's clouds have no FLOAT32 z field");
+  sensor_msgs::Image image;
+  image.width = cloud.width;
+  image.height = cloud.height;
+  image.encoding = "16UC1";
+  image.is_bigendian = 0;
+  image.step = cloud.width * 2;
+  image.data.resize(static_cast<std::size_t>(image.step) * image.height);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(cloud.width) * cloud.height; ++i) {
+    float z;
+    std::memcpy(&z, &cloud.data[i * cloud.point_step + static_cast<std::size_t>(z_offset)], sizeof z);
+    const std::uint16_t millimetres =
+        std::isfinite(z) && z > 0.0f && z < 65.0f ? static_cast<std::uint16_t>(std::lround(z * 1000.0f)) : 0;
+    std::memcpy(&image.data[i * 2], &millimetres, sizeof millimetres);
+  }
+  sensor_msgs::CameraInfo info;
+  info.width = cloud.width;
+  info.height = cloud.height;
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {525.0, 0.0, 320.0, 0.0, 525.0, 240.0, 0.0, 0.0, 1.0};
+  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  info.P = {525.0, 0.0, 320.0, 0.0, 0.0, 525.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  return {image, info};
+}
+
+/// The topic beside an image topic that holds its CameraInfo (image_transport's convention).
+std::string
+cameraInfoTopic(const std::string& image_topic)
+{
+  const std::size_t slash = image_topic.rfind('/');
+  return (slash == std::string::npos ? std::string() : image_topic.substr(0, slash + 1)) + "camera_info";
+}
+
+/// Publishes the bag's frames on `input` (clouds, or with `depth` 16UC1 images and their
+/// CameraInfo), receives `output` (of the same kind) and prints the figures.
 int
-play(const std::string& path, const std::string& input, const std::string& output, double seconds, double rate)
+play(const std::string& path, const std::string& input, const std::string& output, double seconds, double rate,
+     bool depth)
 {
   const std::vector<sensor_msgs::PointCloud2> clouds = readBag(path);
+  std::vector<std::pair<sensor_msgs::Image, sensor_msgs::CameraInfo>> images;
+  if (depth)
+    for (const sensor_msgs::PointCloud2& cloud : clouds)
+      images.push_back(depthImageOf(cloud));
   ros::NodeHandle node;
   Receipts receipts;
-  ros::Publisher publisher = node.advertise<sensor_msgs::PointCloud2>(input, 1);
+  ros::Publisher publisher = depth ? node.advertise<sensor_msgs::Image>(input, 1)
+                                   : node.advertise<sensor_msgs::PointCloud2>(input, 1);
+  ros::Publisher info_publisher;
+  if (depth)
+    info_publisher = node.advertise<sensor_msgs::CameraInfo>(cameraInfoTopic(input), 1);
+  const auto received = [&](const std_msgs::Header& header) {
+    const double now = ros::WallTime::now().toSec();
+    std::lock_guard<std::mutex> lock(receipts.mutex);
+    receipts.stamps.push_back(header.stamp.toSec());
+    receipts.arrivals.push_back(now);
+  };
   ros::Subscriber subscriber =
-      node.subscribe<sensor_msgs::PointCloud2>(output, 100, [&](const sensor_msgs::PointCloud2::ConstPtr& m) {
-        const double now = ros::WallTime::now().toSec();
-        std::lock_guard<std::mutex> lock(receipts.mutex);
-        receipts.stamps.push_back(m->header.stamp.toSec());
-        receipts.arrivals.push_back(now);
-      });
+      depth ? node.subscribe<sensor_msgs::Image>(output, 100,
+                                                 [&](const sensor_msgs::Image::ConstPtr& m) { received(m->header); })
+            : node.subscribe<sensor_msgs::PointCloud2>(output, 100, [&](const sensor_msgs::PointCloud2::ConstPtr& m) {
+                received(m->header);
+              });
   ros::AsyncSpinner spinner(1);
   spinner.start();
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(30.0);
@@ -106,12 +177,21 @@ play(const std::string& path, const std::string& input, const std::string& outpu
   std::size_t sent = 0, sent_after_warmup = 0;
   ros::WallRate pace(rate);
   while (ros::ok() && ros::WallTime::now().toSec() < start + seconds) {
-    sensor_msgs::PointCloud2 m = clouds[sent % clouds.size()];
-    m.header.seq = static_cast<std::uint32_t>(sent);
-    m.header.stamp.fromSec(ros::WallTime::now().toSec()); // stamped at capture, as a driver does
-    if (m.header.stamp.toSec() >= warmup_end)
+    std_msgs::Header header = clouds[sent % clouds.size()].header;
+    header.seq = static_cast<std::uint32_t>(sent);
+    header.stamp.fromSec(ros::WallTime::now().toSec()); // stamped at capture, as a driver does
+    if (header.stamp.toSec() >= warmup_end)
       ++sent_after_warmup;
-    publisher.publish(m);
+    if (depth) {
+      auto [image, info] = images[sent % images.size()];
+      image.header = info.header = header;
+      info_publisher.publish(info);
+      publisher.publish(image);
+    } else {
+      sensor_msgs::PointCloud2 m = clouds[sent % clouds.size()];
+      m.header = header;
+      publisher.publish(m);
+    }
     ++sent;
     pace.sleep();
   }
@@ -129,12 +209,13 @@ main(int argc, char** argv)
   ros::init(argc, argv, "range_nlm_camera_rate", ros::init_options::AnonymousName);
   const std::vector<std::string> args(argv + 1, argv + argc);
   try {
-    if ((args.size() == 5 || args.size() == 6) && args[0] == "play")
-      return play(args[1], args[2], args[3], std::stod(args[4]), args.size() == 6 ? std::stod(args[5]) : 30.0);
+    if ((args.size() == 5 || args.size() == 6) && (args[0] == "play" || args[0] == "play-depth"))
+      return play(args[1], args[2], args[3], std::stod(args[4]), args.size() == 6 ? std::stod(args[5]) : 30.0,
+                  args[0] == "play-depth");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "range_nlm_ros_camera_rate: %s\n", e.what());
     return 1;
   }
-  std::fprintf(stderr, "usage: range_nlm_ros_camera_rate play BAG INPUT OUTPUT SECONDS [RATE_HZ]\n");
+  std::fprintf(stderr, "usage: range_nlm_ros_camera_rate play|play-depth BAG INPUT OUTPUT SECONDS [RATE_HZ]\n");
   return 2;
 }

@@ -3,7 +3,7 @@
 # range_nlm/TemporalFilterNodelet loaded, and a VGA bag (the frames of data/kinect-sequence,
 # looped) replayed at 30 Hz, each message stamped when it is sent. Prints, per mode (the live
 # preset static and recursive radius 1, each with queue_size 1 (its default) and 2, the default
-# preset static): output rate, latency
+# preset static, and the live preset on 16UC1 depth images static and recursive): output rate, latency
 # from stamp to receipt (median, 95th percentile), frames dropped and how old the previous
 # output's frame is.
 #
@@ -62,6 +62,8 @@ done
 pids+=($!)
 
 echo "range_nlm nodelet at $rate Hz, VGA PointCloud2 (x y z rgba), $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+# run_mode NAME NODE_ARGS...: the nodelet on PointCloud2 (input, output); with PLAY=play-depth on
+# 16UC1 depth images and their CameraInfo (depth/image, depth_filtered/image; give _input:=depth).
 run_mode() {
   local name=$1
   shift
@@ -69,7 +71,9 @@ run_mode() {
   local loader=$!
   pids+=("$loader")
   printf '%-28s ' "$name ($*):"
-  "$player" play "$work/vga.bag" "/$name/input" "/$name/output" "$seconds" "$rate" ||
+  local in=input out=output
+  [[ ${PLAY:-play} == play-depth ]] && in=depth/image out=depth_filtered/image
+  "$player" "${PLAY:-play}" "$work/vga.bag" "/$name/$in" "/$name/$out" "$seconds" "$rate" ||
     { echo "failed; manager log:"; tail -20 "$work/manager.log"; }
   kill -INT "$loader" 2>/dev/null || true
   wait "$loader" 2>/dev/null || true
@@ -82,3 +86,7 @@ run_mode live_recursive
 run_mode live_recursive_queue2 _queue_size:=2
 # The accuracy setting for recorded data, for comparison.
 run_mode default_static _preset:=default _temporal_radius:=0
+# The live preset on depth images (16UC1 with CameraInfo, as realsense2_camera publishes them):
+# each filtered point is put back on its pixel's ray before its depth is written.
+PLAY=play-depth run_mode live_static_depth _input:=depth _temporal_radius:=0
+PLAY=play-depth run_mode live_recursive_depth _input:=depth
