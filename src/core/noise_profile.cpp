@@ -125,7 +125,8 @@ interpolateAvx512(const std::vector<float>& xs, const std::vector<float>& ys, co
 std::vector<std::pair<InterpolateBuild, InterpolateBuild>>
 interpolateBuilds()
 {
-  std::vector<std::pair<InterpolateBuild, InterpolateBuild>> all{{&interpolateBaseline<false>, &interpolateBaseline<true>}};
+  std::vector<std::pair<InterpolateBuild, InterpolateBuild>> all{
+      {&interpolateBaseline<false>, &interpolateBaseline<true>}};
 #if defined(__x86_64__)
   if (detail::cpuRunsAvx2())
     all.emplace_back(&interpolateAvx2<false>, &interpolateAvx2<true>);

@@ -412,7 +412,8 @@ reproject(const Cloud& input, const Cloud& filtered, const RayReprojectionParame
     if (isValid(filtered[static_cast<std::size_t>(k)]))
       ranges[static_cast<std::size_t>(k)] = vectorOf(filtered[static_cast<std::size_t>(k)]).norm();
   // Each point is computed from the clouds as given: the result does not depend on the threads.
-#pragma omp parallel for schedule(dynamic, 2048) reduction(+ : on_plane, grazing, unmoved, without_ray) reduction(&& : dense)
+#pragma omp parallel for schedule(dynamic, 2048) reduction(+ : on_plane, grazing, unmoved, without_ray) \
+    reduction(&& : dense)
   for (std::ptrdiff_t k = 0; k < size; ++k) {
     const std::size_t i = static_cast<std::size_t>(k);
     const pcl::PointXYZ& p = input[i];
