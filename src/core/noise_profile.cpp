@@ -105,7 +105,7 @@ interpolateBaseline(const std::vector<float>& xs, const std::vector<float>& ys, 
 
 #if defined(__x86_64__)
 template <bool Second>
-[[gnu::target("avx2")]] void
+[[RANGE_NLM_TARGET_AVX2]] void
 interpolateAvx2(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                 std::size_t n, const std::vector<float>* ys2, float* out2)
 {
@@ -113,7 +113,7 @@ interpolateAvx2(const std::vector<float>& xs, const std::vector<float>& ys, cons
 }
 
 template <bool Second>
-[[gnu::target("avx512f,avx512vl,avx512dq,avx512bw,prefer-vector-width=512")]] void
+[[RANGE_NLM_TARGET_AVX512]] void
 interpolateAvx512(const std::vector<float>& xs, const std::vector<float>& ys, const float* x, float* out,
                   std::size_t n, const std::vector<float>* ys2, float* out2)
 {

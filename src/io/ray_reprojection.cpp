@@ -51,12 +51,18 @@ numberText(double value)
   return s.str();
 }
 
-/// Whether `point` lies within the range gate of a point at range `range` (on its side of a
-/// depth edge).
+/// Whether a point at range `point_range` lies within the range gate of a point at range `range`
+/// (on its side of a depth edge).
+bool
+withinRangeGate(double point_range, double range, const RayReprojectionParameters& parameters)
+{
+  return std::fabs(point_range - range) <= parameters.range_gate * range;
+}
+
 bool
 withinRangeGate(const Eigen::Vector3d& point, double range, const RayReprojectionParameters& parameters)
 {
-  return std::fabs(point.norm() - range) <= parameters.range_gate * range;
+  return withinRangeGate(point.norm(), range, parameters);
 }
 
 /// The unit normal of the plane of a window's points from their moments (relative to the centre
@@ -208,14 +214,14 @@ laneWindowSumsBaseline(const PaddedPoints& P, int u0, int v, int r, double range
 }
 
 #if defined(__x86_64__)
-[[gnu::target("avx2")]] void
+[[RANGE_NLM_TARGET_AVX2]] void
 laneWindowSumsAvx2(const PaddedPoints& P, int u0, int v, int r, double range_gate, const bool* live,
                    double (*sum)[kLanes], double (*second)[kLanes], int* count)
 {
   laneWindowSums(P, u0, v, r, range_gate, live, sum, second, count);
 }
 
-[[gnu::target("avx512f,avx512vl,avx512dq,avx512bw,prefer-vector-width=512")]] void
+[[RANGE_NLM_TARGET_AVX512]] void
 laneWindowSumsAvx512(const PaddedPoints& P, int u0, int v, int r, double range_gate, const bool* live,
                      double (*sum)[kLanes], double (*second)[kLanes], int* count)
 {
@@ -318,7 +324,7 @@ planeAngleSpread(const Cloud& filtered, const std::vector<Eigen::Vector3d>& norm
       if ((a == 0 && b == 0) || x < 0 || y < 0 || x >= w || y >= h)
         continue;
       const std::size_t j = static_cast<std::size_t>(y) * w + x;
-      if (normals[j].isZero() || !(std::fabs(ranges[j] - range) <= parameters.range_gate * range))
+      if (normals[j].isZero() || !withinRangeGate(ranges[j], range, parameters))
         continue;
       sum += normals[j].cross(n).squaredNorm();
       ++count;

@@ -147,6 +147,11 @@ cpuRunsAvx512();
 bool
 cpuRunsAvx2();
 
+/// For code outside the kernel files built for those instruction sets as well (function targets,
+/// x86-64 only; chosen at run time with cpuRunsAvx2 / cpuRunsAvx512): [[RANGE_NLM_TARGET_AVX2]].
+#define RANGE_NLM_TARGET_AVX2 gnu::target("avx2")
+#define RANGE_NLM_TARGET_AVX512 gnu::target("avx512f,avx512vl,avx512dq,avx512bw,prefer-vector-width=512")
+
 /// The fastest kernels this CPU supports.
 const RowKernels&
 rowKernels();
